@@ -59,9 +59,11 @@ def counted(self: Any, idx: Any, *a: Any) -> Any:
 env_cls._begin_rows_kernel = counted  # type: ignore[method-assign]
 parts = [
     (env_cls, "_begin_rows_kernel", "restarts, all"),
-    (tracking, "draw_path", "  draw the path and build it (families; random: cached)"),
+    (tracking, "draw_family", "  draw the path's family and parameters"),
+    (tracking, "random_pool_path", "  the random pool's paths (cached)"),
+    (fast_v1_batch.PathArena, "build", "  the family paths built in the arena (compiled)"),
     (fast_v1_batch.PathArena, "assign", "  the path arena (flat copies)"),
-    (path_batch.PathBatch, "replace", "  the path batch (Python objects)"),
+    (path_batch.PathBatch, "replace", "  the path batch (Python objects; built when asked for)"),
     (fast_v1_batch.BatchKernel, "start", "  the start records (compiled)"),
     (tracking, "start_state", "  the start states"),
     (env_cls, "_draws", "  the episode draws (compiled)"),

@@ -362,6 +362,92 @@ def test_path_arena_rows_read_their_paths() -> None:
     assert arena.used - arena._dead == sum(fast_v1.flat_path(q).size for q in live.values())
 
 
+def _family_rows(rng: np.random.Generator, m: int) -> tuple[list[str], Any, Any]:
+    # m random family descriptions (mixed's families and more: the figure-8's angle and transition, the lead)
+    from amigo_gym.paths.families import SEGMENT_FAMILIES
+
+    names = [SEGMENT_FAMILIES[int(j)] for j in rng.integers(0, 3, m)]
+    u = rng.uniform
+    values = {"circle": lambda: (u(0.3, 3.0), float(rng.choice([-1.0, 1.0])), 0.0),
+              "figure8": lambda: (u(1.0, 8.0), u(0.3, 2.0), u(0.0, 1.0)),
+              "lane_change": lambda: (u(-2.0, 2.0), u(3.0, 6.0), u(0.0, 2.0))}  # fmt: skip
+    params = np.array([values[f]() for f in names])
+    return names, np.array([SEGMENT_FAMILIES.index(f) for f in names], dtype=np.int64), params
+
+
+def _family_path(name: str, v: Any) -> Any:
+    # the family constructor's path of _family_rows' description (compiled loops)
+    from amigo_gym.paths import families
+
+    keys = {"circle": ("radius", "direction"), "figure8": ("size", "crossing_angle", "transition"),
+            "lane_change": ("offset", "length", "lead")}[name]  # fmt: skip
+    given = dict(zip(keys, v.tolist(), strict=False))
+    given.update({"direction": int(given["direction"])} if name == "circle" else {})
+    return families.FAMILIES[name].build(loops=fast_v1.path_loops(), **given)
+
+
+def test_path_arena_builds_family_paths_in_place() -> None:
+    """Rows whose family paths the arena builds (``PathArena.build``, compiled) read the constructors' own flat
+    vectors bit for bit (the same compiled functions), among rows holding path objects, through compactions."""
+    from amigo_gym.sim.fast_v1_batch import PathArena
+    from amigo_gym.task import v1 as tracking
+
+    p = tracking.make_tracking_params("t", None, path="random")
+    pool = [tracking.random_pool_path(p, i) for i in range(10)]
+    n = 12
+    arena = PathArena(n)
+    want: list[Any] = [None] * n
+    rng = np.random.default_rng(4)
+    compacted = False
+    for _ in range(120):
+        idx = sorted(set(rng.integers(0, n, 5).tolist()))
+        held, built = idx[: len(idx) // 2], idx[len(idx) // 2 :]
+        objs = [pool[int(j)] for j in rng.integers(0, len(pool), len(held))]
+        names, kinds, params = _family_rows(rng, len(built))
+        used = arena.used
+        arena.assign(held, objs)
+        arena.build(built, kinds, params)
+        compacted |= arena.used < used
+        for i, q in zip(held, objs, strict=True):
+            want[i] = fast_v1.flat_path(q)
+        for i, name, v in zip(built, names, params, strict=True):
+            want[i] = _family_path(name, v)._t.flat
+        for i, f in enumerate(want):
+            if f is not None:
+                np.testing.assert_array_equal(arena.flat[arena.starts[i] : arena.stops[i]], f)
+    assert compacted
+    clone = pickle.loads(pickle.dumps(arena))  # the built rows' keys survive (no object behind them)
+    for i, f in enumerate(want):
+        np.testing.assert_array_equal(clone.flat[clone.starts[i] : clone.stops[i]], f)
+    with pytest.raises(ValueError, match=r"row 3's lane_change parameters \[5.0, 3.0, 1.0\] build no path"):
+        arena.build([3], np.array([2]), np.array([[5.0, 3.0, 1.0]]))  # |offset| > 0.68 length
+
+
+def test_drawn_paths_are_the_arenas_and_their_descriptions() -> None:
+    """The native vector env's drawn family paths (built in the arena) are, when asked for (``env.paths``), the
+    family constructors' paths of ``path_infos``, the arena's vectors bit for bit; through restarts and pickling."""
+    from amigo_gym.paths import FAMILIES
+
+    n = 48
+    env = _make(n, AutoresetMode.NEXT_STEP, "numba", **TASKS["mixed-hard-speeds"])
+    env.reset(seed=5)
+    rng = np.random.default_rng(5)
+    for t in range(150):
+        env.step(_actions(rng, n))
+        if t in (60, 149):
+            u = pickle.loads(pickle.dumps(env)).unwrapped if t == 149 else env.unwrapped
+            a = u._batch.arena  # type: ignore[attr-defined]
+            for i in range(n):
+                info, path = u.path_infos[i], u.paths[i]  # type: ignore[attr-defined]
+                np.testing.assert_array_equal(a.flat[a.starts[i] : a.stops[i]], path._t.flat)
+                if info["family"] != "random":  # the Python constructor's (another route: to rounding)
+                    want = FAMILIES[info["family"]].build(**{k: v for k, v in info.items() if k != "family"})
+                    assert (path.start, path.start_angle, path.closed) == (want.start, want.start_angle, want.closed)
+                    segs = [[(g.length, g.curvature, g.curvature_rate) for g in q.segments] for q in (path, want)]
+                    np.testing.assert_allclose(segs[0], segs[1], rtol=1e-13, atol=1e-13)
+    assert {d["family"] for d in u.path_infos} == {"circle", "figure8", "lane_change", "random"}
+
+
 def test_path_arena_survives_pickling() -> None:
     from amigo_gym.sim.fast_v1_batch import PathArena
     from amigo_gym.task import v1 as tracking

@@ -37,7 +37,9 @@ from amigo_gym.envs.base import (
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, castor_rate_columns
 from amigo_gym.model.randomization import EpisodeDraw
-from amigo_gym.paths.clothoid import locate_columns, pose_columns_of
+from amigo_gym.paths.batch import PathBatch
+from amigo_gym.paths.clothoid import P_CLOSED, P_LENGTH, locate_columns, pose_columns_of
+from amigo_gym.paths.families import FAMILIES, segment_params
 from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -61,12 +63,13 @@ ROW_BYTES = 3200
 
 def memory_needed(n: int, p: tracking.TrackingParams, render_mode: str | None = None) -> int:
     """An estimate of the memory of ``n`` robots [bytes]: :data:`ROW_BYTES` each, the command ring, the render trail
-    and, for drawn paths, twice a drawn path (the path and its copy in the compiled step's arena)."""
+    and, for drawn paths, a drawn path in the compiled step's arena (a random one also as a Python object; a family
+    path's is built only when :attr:`AmigoBotV1VectorEnv.paths` is read)."""
     per = ROW_BYTES + 16 * tracking.command_ring_length(p)
     if render_mode is not None:
         per += 16 * TRAIL_LENGTH
     if tracking.fixed_path(p) is None:
-        per += 2 * tracking.path_nbytes(tracking.random_pool_path(p, 0)) if p.path == "random" else 2 * 25_000
+        per += 2 * tracking.path_nbytes(tracking.random_pool_path(p, 0)) if p.path == "random" else 25_000
     return n * per
 
 
@@ -142,8 +145,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         params: Any = None,
         **settings: Any,
     ) -> None:
-        from amigo_gym.paths import PathBatch
-
         owner = type(self).__name__
         check_vector_args(owner, num_envs, max_episode_steps, render_mode)
         fast_v1.check_kernel(owner, kernel, VECTOR_KERNELS)
@@ -182,7 +183,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._renderers: list[Any] = [None] * n
         self._was_reset = False
         placeholder = fixed if fixed is not None else tracking.random_pool_path(p, 0)
-        self.paths = PathBatch([placeholder] * n)
+        self._paths = PathBatch([placeholder] * n)
+        self._unbuilt: dict[int, Any] = {}  # row -> its drawn path or description, not yet in _paths
         self.path_infos: list[dict[str, Any]] = [{} for _ in range(n)]
         self._state = tracking.State._make([*(np.zeros(n) for _ in _STATE_FIELDS[:-1]), np.zeros(n, dtype=np.int64)])
         self._episode = _columns(tracking.Episode, [0] * len(_EPISODE_FIELDS), n)
@@ -201,6 +203,19 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self._goal = np.full((n, 2), np.nan)
         self._no_end = np.full(n, "", dtype=object)  # end_condition's template: copied, a quarter of np.full's time
         self._h_now: Array = np.zeros((n, 2)) if render_mode is not None else np.zeros((0, 2))
+
+    @property
+    def paths(self) -> PathBatch:
+        """Each robot's path (:class:`amigo_gym.paths.PathBatch`). A drawn family path is built when first asked for
+        here (the compiled step builds only its flat vector; the same path)."""
+        if self._unbuilt:
+            loops = fast_v1.path_loops()
+            rows, got = np.fromiter(self._unbuilt, dtype=np.intp), list(self._unbuilt.values())
+            self._unbuilt = {}
+            built = [FAMILIES[q["family"]].build(loops=loops, **tracking.info_params(q)) if isinstance(q, dict) else q
+                     for q in got]  # fmt: skip
+            self._paths.replace(rows, built)
+        return self._paths
 
     @property
     def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
@@ -355,7 +370,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             recs.append(reference_record(k.w_max, b.state, b.outcome, tracking.NO_NOISE, 0.0))
         st = tracking.State(*(np.array(c) for c in zip(*states, strict=True)))
         self._set_rows(idx, st, _columns(tracking.Episode, zip(*episodes, strict=True), len(idx)))
-        self.paths.replace(idx, paths)
+        self._paths.replace(idx, paths)
         self._castor[idx] = 0.0
         self._goal[idx] = [tracking.goal_point(self._k.params, path) for path in paths]
         return np.stack(recs)
@@ -380,30 +395,44 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             if pose_opt is None:  # the start states and their evaluation in one compiled call
                 return self._started(idx, b.restart(rows, path, self._template_row, u_all, obs), None, template)
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
-        else:  # each row draws its path (built by the compiled loops) and episode
-            loops = fast_v1.path_loops()
-            paths = []
+        else:  # each row draws its path and episode; the family paths built in the arena, the others held there
+            held: list[tuple[int, Any]] = []
+            built: list[tuple[int, tuple[int, float, float, float]]] = []
+            drawn = k.params.path in ("random", "mixed")
             for i in rows:
-                q, self.path_infos[i] = tracking.draw_path(self._rng(i), k.params, loops)
-                paths.append(q)
+                rng = self._rng(i)
+                q, info = (None, tracking.draw_family(rng, k.params)) if drawn else tracking.draw_path(rng, k.params)
+                self.path_infos[i] = info
+                if info["family"] == "random":
+                    q = tracking.random_pool_path(k.params, info["id"], fast_v1.path_loops())
+                self._unbuilt[i] = info if q is None else q
+                if q is None:
+                    built.append((i, segment_params(info["family"], info)))
+                else:
+                    held.append((i, q))
             intervals, keyed = tracking.episode_draws(k.params)  # then each row's draw_episode
             draws, keys = self._draws(idx, [*intervals, *_U3], keyed)
             ep = tracking.episode_of(k.params, draws[:, 0], EpisodeDraw(*draws[:, 1:6].T), keys)
             ep_all = _columns(tracking.Episode, ep, m)
             u_all = draws[:, 6:]
-            b.arena.assign(rows, paths)  # the rows' flat paths: their poses and projections in one call each
-            flat, at, w = b.arena.flat, b.arena.starts[idx], k.window
+            a = b.arena
+            a.assign([i for i, _ in held], [q for _, q in held])
+            if built:
+                kinds = np.array([v[0] for _, v in built], dtype=np.int64)
+                a.build([i for i, _ in built], kinds, np.array([v[1:] for _, v in built]))
+            flat, at, w = a.flat, a.starts[idx], k.window  # the rows' poses and projections in one call each
             fns = (lambda _, x, y, s: locate_columns(flat, at, x, y, np.full(m, s), w, w).progress,
                    lambda _, s: pose_columns_of(flat, at, s))  # fmt: skip
         st = tracking.start_state(k, path, ep_all, tuple(u_all.T), *fns)
         if pose_opt is not None:
             st = tracking.placed_state(k, path, ep_all, st, tuple(pose_opt[idx].T), fns[0])
         st_all = _columns(tracking.State, st, m)
-        goals = {id(q): tracking.goal_point(k.params, q) for q in paths}
-        self._goal[idx] = [goals[id(q)] for q in paths]
-        if template is None:
-            self.paths.replace(idx, paths)
-        return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
+        if template is not None:
+            return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
+        if k.params.goal_tolerance > 0.0:  # the ends of the open paths (tracking.goal_point)
+            ends = pose_columns_of(flat, at, flat[at + P_LENGTH])
+            self._goal[idx] = np.where((flat[at + P_CLOSED] == 0.0)[:, None], np.c_[ends.x, ends.y], np.nan)
+        return self._started(idx, b.start(rows, None, st_all, ep_all, obs), st_all, ep_all)
 
     def _draws(self, idx: NDArray[np.intp], intervals: list[Any], keyed: bool) -> tuple[Array, NDArray[np.uint64]]:
         # each row's draws (m, q) of the intervals (lo, hi) and key (0 unless keyed), as numpy's: one compiled call

@@ -55,6 +55,8 @@ MIN_NEWTON_DENOMINATOR = 0.05
 #: largest length [m] and curvature [1/m] of a segment
 MAX_SEGMENT_LENGTH = 1.0e5
 MAX_CURVATURE = 1.0e4
+#: the default largest spacing [m] of a path's coarse projection samples
+SAMPLE_SPACING = 0.02
 #: closure tolerance of a closed path: position gap relative to max(1 m, length), and heading gap [rad]
 CLOSURE_TOLERANCE = 1e-9
 
@@ -156,14 +158,14 @@ class _Tables:
 
 
 class PathLoops(NamedTuple):
-    """The compiled :func:`chain_pieces`, :func:`sample_points`, :func:`~amigo_gym.paths.families.run_segments`,
-    :func:`~amigo_gym.paths.families.lane_change_shape`, :func:`locate_rows`, :func:`pose_rows` (scratch and nodes
-    supplied): the ``loops=`` of the path constructors (:func:`amigo_gym.sim.fast_v1.path_loops`)."""
+    """The compiled :func:`~amigo_gym.paths.families.family_segments` (``family(kind, a, b, c)``: the segments and
+    their number last), :func:`build_flat` with the samples (``flat(pv, segs, n_segs, n, m, total, spacing, x, y,
+    theta, closed)``), :func:`sample_points`, :func:`locate_rows`, :func:`pose_rows` (scratch and nodes supplied): the
+    ``loops=`` of the path constructors (:func:`amigo_gym.sim.fast_v1.path_loops`)."""
 
-    chain: Callable[..., tuple[float, float, float, float]]
+    family: Callable[..., Array]
+    flat: Callable[..., tuple[float, float]]
     samples: Callable[..., None]
-    run: Callable[..., tuple[float, float, float]]
-    lane: Callable[..., tuple[float, float, float, float]]
     locate: Callable[..., None]
     pose: Callable[..., None]
 
@@ -181,7 +183,7 @@ class ClothoidPath(_Projecting):
     start: tuple[float, float] = (0.0, 0.0)
     start_angle: float = 0.0
     closed: bool = False
-    sample_spacing: float = 0.02
+    sample_spacing: float = SAMPLE_SPACING
     _t: _Tables = field(init=False, repr=False, compare=False)
     loops: InitVar[PathLoops | None] = None
 
@@ -204,57 +206,29 @@ class ClothoidPath(_Projecting):
         object.__setattr__(self, "_t", self._build(loops))
 
     def _build(self, loops: PathLoops | None = None) -> _Tables:
-        segs: list[float] = []
-        n = 0
-        kmax = 0.0
-        for g in self.segments:  # (floats: checked, finite)
-            length, k, rate = g.length, g.curvature, g.curvature_rate
-            kabs = max(abs(k), abs(k + rate * length))
-            kmax = max(kmax, kabs)
-            # piece j of n: |k_j| h + |c| h^2 / 2 <= (kabs L + |c| L^2 / 2) / n <= MAX_PHASE_PER_SUB
-            count = subinterval_count(kabs * length + 0.5 * abs(rate) * length * length)
-            segs += (length, k, rate, float(count))
-            n += count
-        n_segs = len(self.segments)
+        segs = [v for g in self.segments for v in (g.length, g.curvature, g.curvature_rate, 0.0)]  # checked floats
+        n_segs, closed = len(self.segments), self.closed
+        n, m, total, kmax, spacing = path_layout(segs, n_segs, float(self.sample_spacing), closed)
         x, y, th = float(self.start[0]), float(self.start[1]), float(self.start_angle)
         if loops is None:
-            out: Any = [0.0] * (6 * n)
-            x, y, th, total = chain_pieces(out, n, segs, n_segs, x, y, th, [0.0] * _SCRATCH, _PATH_TABLE)
+            pv: Any = [0.0] * (P_TAIL + 6 * n + 2 * m)
+            gap, turn_gap = build_flat(pv, segs, n_segs, n, m, total, spacing, x, y, th, closed, [0.0] * _SCRATCH,
+                                       _PATH_TABLE)  # fmt: skip
+            flat, o = np.array(pv), P_TAIL + 6 * n
+            if _COMPILED:  # (the compiled pose either way)
+                _COMPILED[0].samples(flat, o, m, spacing)
+            else:
+                poses = _poses_flat(pv, (np.arange(m, dtype=np.float64) * spacing).tolist())
+                flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]
         else:
-            out = np.empty(6 * n)
-            x, y, th, total = loops.chain(out, n, np.array(segs), n_segs, x, y, th)
-        raw_turn = th - float(self.start_angle)
-        turn = raw_turn
-        if self.closed:
-            turn = TWO_PI * round(raw_turn / TWO_PI)
-            gap = math.hypot(x - self.start[0], y - self.start[1])
-            if gap > CLOSURE_TOLERANCE * max(1.0, total) or abs(raw_turn - turn) > CLOSURE_TOLERANCE:
-                raise ValueError(
-                    f"ClothoidPath.closed: the segments end {gap:.3g} m from the start with a heading "
-                    f"{raw_turn - turn:.3g} rad off, but a closed path must end at its start pose"
-                )
-        spacing = min(float(self.sample_spacing), 0.1 / kmax if kmax > 0 else math.inf)
-        n_samples = max(8, math.ceil(total / spacing))
-        spacing = total / n_samples
-        m = n_samples + (0 if self.closed else 1)  # s_j = j spacing up to the end (open) or before it (closed)
-        o = P_TAIL + 6 * n
-        flat = np.zeros(o + 2 * m)
-        flat[:P_TAIL] = (float(n), float(m), total, turn, spacing, 1.0 if self.closed else 0.0, *self._circle())
-        flat[P_TAIL:o] = out
-        if loops is not None or _COMPILED:  # (the compiled pose either way)
-            (loops or _COMPILED[0]).samples(flat, o, m, spacing)
-        else:
-            poses = _poses_flat(flat.tolist(), (np.arange(m, dtype=np.float64) * spacing).tolist())
-            flat[o : o + m], flat[o + m :] = [q[0] for q in poses], [q[1] for q in poses]
-        return _Tables(flat, kmax, float(flat[P_LENGTH]), float(flat[P_TURN]))
-
-    def _circle(self) -> tuple[float, float, float]:
-        # a closed path of arcs of one curvature k: (k, centre x, centre y) [1/m, m, m], else zeros
-        k = self.segments[0].curvature
-        if not self.closed or k == 0.0 or any(g.curvature != k or g.curvature_rate != 0.0 for g in self.segments):
-            return 0.0, 0.0, 0.0
-        th = float(self.start_angle)
-        return k, self.start[0] - math.sin(th) / k, self.start[1] + math.cos(th) / k
+            flat = np.empty(P_TAIL + 6 * n + 2 * m)
+            gap, turn_gap = loops.flat(flat, np.array(segs), n_segs, n, m, total, spacing, x, y, th, closed)
+        if gap > CLOSURE_TOLERANCE * max(1.0, total) or abs(turn_gap) > CLOSURE_TOLERANCE:
+            raise ValueError(
+                f"ClothoidPath.closed: the segments end {gap:.3g} m from the start with a heading "
+                f"{turn_gap:.3g} rad off, but a closed path must end at its start pose"
+            )
+        return _Tables(flat, kmax, total, float(flat[P_TURN]))
 
     @cached_property
     def _flat_list(self) -> list[float]:
@@ -631,14 +605,75 @@ _PATH_TABLE: list[float] = node_table(1)
 _SCRATCH = 3 * NODES + 3
 
 
+def path_layout(
+    segs: Buffer, n_segs: int, sample_spacing: float, closed: bool
+) -> tuple[int, int, float, float, float]:  # fmt: skip
+    """The layout of a path of the segments ``segs[4 g : 4 g + 3]`` (length [m], curvature [1/m], rate [1/m^2]):
+    each one's piece count into ``segs[4 g + 3]`` (the phase of a piece <= ``MAX_PHASE_PER_SUB``), and ``(n pieces,
+    m samples, length [m], max |kappa| [1/m], sample spacing [m])``: ``m`` samples ``s_j = j spacing`` up to the end
+    (open) or before it (closed), spaced by at most ``sample_spacing`` and ``0.1 / max|kappa|``, at least 8."""
+    n = 0
+    kmax = 0.0
+    total = 0.0
+    for g in range(n_segs):
+        length = segs[4 * g]
+        k = segs[4 * g + 1]
+        rate = segs[4 * g + 2]
+        kabs = py_max(abs(k), abs(k + rate * length))
+        kmax = py_max(kmax, kabs)
+        # piece j of n: |k_j| h + |c| h^2 / 2 <= (kabs L + |c| L^2 / 2) / n <= MAX_PHASE_PER_SUB
+        count = subinterval_count(kabs * length + 0.5 * abs(rate) * length * length)
+        segs[4 * g + 3] = float(count)
+        n += count
+        total += length
+    spacing = py_min(sample_spacing, 0.1 / kmax) if kmax > 0.0 else sample_spacing
+    n_samples = max(8, math.ceil(total / spacing))
+    return n, n_samples + (0 if closed else 1), total, kmax, total / n_samples
+
+
+def build_flat(
+    pv: Buffer, segs: Buffer, n_segs: int, n: int, m: int, total: float, spacing: float, x: float, y: float,
+    th: float, closed: bool, buf: Buffer, nodes: Buffer,
+) -> tuple[float, float]:  # fmt: skip
+    """The flat vector of the path of :func:`path_layout`'s segments and layout from ``(x, y, th)`` into ``pv``
+    (``P_TAIL + 6 n + 2 m`` floats; the samples left to :func:`sample_points`): the header and the pieces chained
+    (:func:`chain_pieces`). Returns a closed path's distance [m] and heading difference [rad] from its end pose to its
+    start's modulo ``2 pi`` (0, 0 if open)."""
+    xe, ye, the = chain_pieces(pv, n, segs, n_segs, x, y, th, buf, nodes)
+    turn = the - th
+    gap = 0.0
+    turn_gap = 0.0
+    if closed:
+        turn = TWO_PI * math.floor(turn / TWO_PI + 0.5)
+        gap = math.hypot(xe - x, ye - y)
+        turn_gap = the - th - turn
+    # a closed path of arcs of one curvature k (a circle): k and its centre
+    k = segs[1]
+    for g in range(n_segs):
+        if segs[4 * g + 1] != k or segs[4 * g + 2] != 0.0:
+            k = 0.0
+    if not closed:
+        k = 0.0
+    pv[P_N] = float(n)
+    pv[P_M] = float(m)
+    pv[P_LENGTH] = total
+    pv[P_TURN] = turn
+    pv[P_SPACING] = spacing
+    pv[P_CLOSED] = 1.0 if closed else 0.0
+    pv[P_CIRCLE_K] = k
+    pv[P_CIRCLE_X] = x - math.sin(th) / k if k != 0.0 else 0.0
+    pv[P_CIRCLE_Y] = y + math.cos(th) / k if k != 0.0 else 0.0
+    return gap, turn_gap
+
+
 def chain_pieces(
-    out: Buffer, n: int, segs: Buffer, n_segs: int, x: float, y: float, th: float, buf: Buffer, nodes: Buffer
-) -> tuple[float, float, float, float]:
+    pv: Buffer, n: int, segs: Buffer, n_segs: int, x: float, y: float, th: float, buf: Buffer, nodes: Buffer
+) -> tuple[float, float, float]:
     """Split the segments ``segs[4 g : 4 g + 4]`` (length [m], curvature [1/m], rate [1/m^2], piece count) into
-    pieces chained from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into ``out[6 q : 6 q + 6]`` (one
-    piece's numbers together: one cache line for a pose), ``n`` pieces in all (``buf``, ``nodes`` as
-    :func:`pose_flat`); returns ``(x, y, theta, length)`` at the end."""
-    q = 0
+    pieces chained from ``(x, y, th)``: piece ``q``'s ``s0, x0, y0, th0, k0, c`` into ``pv[P_TAIL + 6 q :][:6]``
+    (one piece's numbers together: one cache line for a pose), ``n`` pieces in all (``buf``, ``nodes`` as
+    :func:`pose_flat`); returns ``(x, y, theta)`` at the end."""
+    q = P_TAIL
     s_seg = 0.0
     for g in range(n_segs):
         length = segs[4 * g]
@@ -649,16 +684,16 @@ def chain_pieces(
         for j in range(m):
             kj = k + rate * (j * h)
             hj = h if j < m - 1 else length - (m - 1) * h
-            out[6 * q] = s_seg + j * h
-            out[6 * q + 1] = x
-            out[6 * q + 2] = y
-            out[6 * q + 3] = th
-            out[6 * q + 4] = kj
-            out[6 * q + 5] = rate
+            pv[q] = s_seg + j * h
+            pv[q + 1] = x
+            pv[q + 2] = y
+            pv[q + 3] = th
+            pv[q + 4] = kj
+            pv[q + 5] = rate
             x, y, th, _ct, _st = unit_speed_nodes(buf, x, y, th, kj, rate, hj, nodes, 0, NODES)
-            q += 1
+            q += 6
         s_seg += length
-    return x, y, th, s_seg
+    return x, y, th
 
 
 def sample_points(buf: Buffer, nodes: Buffer, pv: FlatPath, o: int, count: int, spacing: float) -> None:

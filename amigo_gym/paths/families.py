@@ -1,7 +1,8 @@
 """Path families of AmigoBot-v1: constructors of :class:`~amigo_gym.paths.clothoid.ClothoidPath` and their registry
 :data:`FAMILIES` (parameter ranges; :func:`make_family_path` builds one by name, a one-line ``ValueError`` naming a
 bad field, value and range). ``loops``: :class:`~amigo_gym.paths.clothoid.PathLoops` or None (Python), the same
-path either way; :func:`run_segments` and :func:`lane_change_shape` are in numba's subset.
+path either way; :func:`family_segments` (the figure-8's and lane change's segments) and the functions it calls are in
+numba's subset.
 """
 
 from __future__ import annotations
@@ -166,66 +167,143 @@ def figure8(
     size: float = 4.0, crossing_angle: float = math.pi / 2, transition: float = 0.5, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
     """A closed figure-8 of width ``size`` [m] in (0, 1000] crossing itself at the origin at ``crossing_angle``
-    [rad] in [0.3, 2.0], curvature continuous. With lobe radius 1, the right lobe leaves the origin at heading
-    ``phi = crossing_angle / 2`` along a line of length ``a = -y_m / sin(phi)`` (the lobe's middle on the x axis),
-    turns right through a clothoid (curvature 0 to -1 over ``b = transition`` in [0, 1.5]), an arc and the mirror
-    clothoid, and returns; the left lobe mirrors it, the whole scaled to ``size``. Starts at the right lobe's
+    [rad] in [0.3, 2.0], curvature continuous (its segments: :func:`figure8_segments`); starts at the right lobe's
     rightmost point heading ``-pi/2``; crosses the origin at ``s = L/4`` and ``3L/4``.
     """
     size, phi, b = _checked("figure8", FIGURE8_RANGES, (size, crossing_angle, transition))
-    phi = 0.5 * phi
-    # the right half-lobe from the line's end to the middle (heading phi -> -pi/2); the clothoid turns b/2
-    arc_half = math.pi / 2 + phi - 0.5 * b
-    if arc_half <= 0.0:
+    segs = _family(loops, 1, size, phi, b)
+    if segs[0] == -1.0:
         raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
-    pieces = [b, 0.0, -1.0 / b, arc_half, -1.0, 0.0] if b > 0.0 else [arc_half, -1.0, 0.0]
-    if loops is not None:
-        xm, ym, _ = loops.run(np.array(pieces), len(pieces) // 3, 0.0, 0.0, phi)
-    else:
-        xm, ym, _ = run_segments([0.0] * RUN_SCRATCH, RUN_NODES, pieces, len(pieces) // 3, 0.0, 0.0, phi)
-    a = -ym / math.sin(phi)
-    if a < 0.0:
+    if segs[0] == -2.0:
         raise ValueError(
             f"figure8: crossing_angle {crossing_angle!r} with transition {transition!r} leaves no room for the "
             "crossing lines; use a smaller angle or transition"
         )
+    return ClothoidPath(_segments(segs, int(segs[-1])), (size / 2.0, 0.0), -math.pi / 2, closed=True, loops=loops)
+
+
+def figure8_segments(buf: Buffer, nodes: Buffer, out: Buffer, size: float, crossing_angle: float, b: float) -> int:
+    """The segments ``out[3 g : 3 g + 3] = (length, curvature, rate)`` of :func:`figure8` (9, or 5 without
+    transitions); their number, or -1 (``b`` too long), -2 (no room for the lines). With lobe radius 1, the right
+    lobe leaves the origin at heading ``phi = crossing_angle / 2`` along a line of length ``a = -y_m / sin(phi)``
+    (the lobe's middle on the x axis), turns right through a clothoid (curvature 0 to -1 over ``b``), an arc and the
+    mirror clothoid, and returns; the left lobe mirrors it, the whole scaled to ``size``. ``buf``, ``nodes``: as
+    :func:`run_segments`."""
+    phi = 0.5 * crossing_angle
+    # the right half-lobe from the line's end to the middle (heading phi -> -pi/2); the clothoid turns b/2
+    arc_half = math.pi / 2 + phi - 0.5 * b
+    if arc_half <= 0.0:
+        return -1
+    g = _transition(out, 0, b, 0.0, -1.0)
+    g = _put(out, g, arc_half, -1.0, 0.0)
+    xm, ym, _ = run_segments(buf, nodes, out, g, 0.0, 0.0, phi)
+    a = -ym / math.sin(phi)
+    if a < 0.0:
+        return -2
     scale = size / (2.0 * (a * math.cos(phi) + xm))
     la, lb, lc = a * scale, b * scale, arc_half * scale
     k = 1.0 / scale
-    seg = ClothoidSegment
-
-    def clothoid(k0: float, k1: float) -> list[ClothoidSegment]:
-        return [seg.transition(lb, k0, k1)] if b > 0.0 else []
-
-    segs = (seg.arc(lc, -k), *clothoid(-k, 0.0), seg.line(2.0 * la), *clothoid(0.0, k), seg.arc(2.0 * lc, k),
-            *clothoid(k, 0.0), seg.line(2.0 * la), *clothoid(0.0, -k), seg.arc(lc, -k))  # fmt: skip
-    return ClothoidPath(segs, (size / 2.0, 0.0), -math.pi / 2, closed=True, loops=loops)
+    g = _transition(out, _put(out, 0, lc, -k, 0.0), lb, -k, 0.0)
+    g = _transition(out, _put(out, g, 2.0 * la, 0.0, 0.0), lb, 0.0, k)
+    g = _transition(out, _put(out, g, 2.0 * lc, k, 0.0), lb, k, 0.0)
+    g = _transition(out, _put(out, g, 2.0 * la, 0.0, 0.0), lb, 0.0, -k)
+    return _put(out, g, lc, -k, 0.0)
 
 
 def lane_change(
     offset: float = 0.5, length: float = 3.0, lead: float = 1.0, *, loops: PathLoops | None = None
 ) -> ClothoidPath:
     """A lane change: ``lead`` [m] in [0, 1000] along x0, a sideways shift by ``offset`` [m] in [-100, 100]
-    (positive left) over ``length`` [m] in (0, 1000], ``lead`` again. The shift: four clothoids of length ``q``,
-    curvature ``0 -> k -> 0 -> -k -> 0``, heading up to ``theta_m = k q <= 1.2 rad`` (``|offset| <~ 0.68 length``)
-    solving ``Y1/X1 = |offset| / length`` for the unit half S-curve (:func:`lane_change_shape`), ``q = L / (2 X1)``.
-    """
+    (positive left) over ``length`` [m] in (0, 1000], ``lead`` again (its segments: :func:`lane_change_segments`;
+    ``|offset| <~ 0.68 length``)."""
     off, ln, lead = _checked("lane_change", LANE_CHANGE_RANGES, (offset, length, lead))
-    ratio = abs(off) / ln
-    if loops is not None:
-        x1, y1, theta_m, xm = loops.lane(ratio)
-    else:
-        x1, y1, theta_m, xm = lane_change_shape([0.0] * RUN_SCRATCH, RUN_NODES, [0.0] * 6, ratio)
-    if ratio > y1 / x1:
+    segs = _family(loops, 2, off, ln, lead)
+    if segs[0] < 0.0:
+        bound = segs[1]
         raise ValueError(
-            f"lane_change.offset must satisfy |offset| <= {y1 / x1:.4f} length = {y1 / x1 * ln:.4g} m, got {offset!r}"
+            f"lane_change.offset must satisfy |offset| <= {bound:.4f} length = {bound * ln:.4g} m, got {offset!r}"
         )
-    q = ln / (2.0 * xm)
-    k = math.copysign(theta_m / q, off) if off != 0.0 else 0.0
-    seg = ClothoidSegment
-    shift = tuple(seg.transition(q, k0, k1) for k0, k1 in ((0.0, k), (k, 0.0), (0.0, -k), (-k, 0.0)))
-    lines = (seg.line(lead),) if lead > 0.0 else ()
-    return ClothoidPath((*lines, *shift, *lines), loops=loops)
+    return ClothoidPath(_segments(segs, int(segs[-1])), loops=loops)
+
+
+def lane_change_segments(buf: Buffer, nodes: Buffer, out: Buffer, offset: float, length: float, lead: float) -> int:
+    """The segments ``out[3 g : 3 g + 3]`` of :func:`lane_change` (6, or 4 without leads) and their number; -1 (and
+    the largest ``|offset| / length`` in ``out[1]``) if the offset is too large. The shift: four clothoids of length
+    ``q``, curvature ``0 -> k -> 0 -> -k -> 0``, heading up to ``theta_m = k q <= 1.2 rad`` solving ``Y1/X1 =
+    |offset| / length`` for the unit half S-curve (:func:`lane_change_shape`), ``q = L / (2 X1)``."""
+    ratio = abs(offset) / length
+    x1, y1, theta_m, xm = lane_change_shape(buf, nodes, out, ratio)
+    if ratio > y1 / x1:
+        out[1] = y1 / x1
+        return -1
+    q = length / (2.0 * xm)
+    k = math.copysign(theta_m / q, offset) if offset != 0.0 else 0.0
+    g = _put(out, 0, lead, 0.0, 0.0) if lead > 0.0 else 0
+    g = _transition(out, _transition(out, g, q, 0.0, k), q, k, 0.0)
+    g = _transition(out, _transition(out, g, q, 0.0, -k), q, -k, 0.0)
+    return _put(out, g, lead, 0.0, 0.0) if lead > 0.0 else g
+
+
+#: the families :func:`family_segments` builds, by number
+SEGMENT_FAMILIES: tuple[str, ...] = ("circle", "figure8", "lane_change")
+#: most segments :func:`family_segments` writes (a figure-8's)
+FAMILY_SEGMENTS = 9
+
+
+def family_segments(buf: Buffer, nodes: Buffer, out: Buffer, kind: int, a: float, b: float, c: float) -> int:
+    """The segments of family ``SEGMENT_FAMILIES[kind]`` with its parameters in order (checked), into ``out`` (at
+    least ``3 FAMILY_SEGMENTS`` floats): :func:`figure8_segments`, :func:`lane_change_segments`, or a circle of
+    radius ``a`` turning by ``b`` (+-1): one arc ``(2 pi a, b / a, 0)``."""
+    if kind == 1:
+        return figure8_segments(buf, nodes, out, a, b, c)
+    if kind == 2:
+        return lane_change_segments(buf, nodes, out, a, b, c)
+    return _put(out, 0, 2.0 * math.pi * a, b / a, 0.0)
+
+
+def segment_params(name: str, values: dict[str, Any]) -> tuple[int, float, float, float]:
+    """``(kind, a, b, c)`` of :func:`family_segments` for the family ``name`` (of :data:`SEGMENT_FAMILIES`) with the
+    parameters ``values`` (unchecked; the rest at their defaults)."""
+    kind = SEGMENT_FAMILIES.index(name)
+    if kind == 0:
+        return 0, float(values.get("radius", 1.0)), float(values.get("direction", 1)), 0.0
+    a, b, c = (float(values.get(k, r.default)) for k, r in FAMILIES[name].params.items())
+    return kind, a, b, c
+
+
+def family_start(kind: int, a: float) -> tuple[float, float, float, bool]:
+    """Start ``(x, y, theta)`` [m, m, rad] and closedness of the path of :func:`family_segments` (``a``: the figure-8's
+    size; a circle from the origin along x0)."""
+    if kind == 1:
+        return 0.5 * a, 0.0, -math.pi / 2, True
+    return 0.0, 0.0, 0.0, kind == 0
+
+
+def _put(out: Buffer, g: int, length: float, k: float, rate: float) -> int:
+    out[3 * g] = length
+    out[3 * g + 1] = k
+    out[3 * g + 2] = rate
+    return g + 1
+
+
+def _transition(out: Buffer, g: int, length: float, k0: float, k1: float) -> int:
+    # a clothoid from k0 to k1 (ClothoidSegment.transition), none if length is 0
+    return _put(out, g, length, k0, (k1 - k0) / length) if length > 0.0 else g
+
+
+def _family(loops: PathLoops | None, kind: int, a: float, b: float, c: float) -> list[float]:
+    # family_segments' (compiled with loops) and their number last; out[0] < 0 on an error
+    if loops is not None:
+        return loops.family(kind, a, b, c).tolist()  # type: ignore[no-any-return]
+    out = [0.0] * (3 * FAMILY_SEGMENTS + 1)
+    out[-1] = family_segments([0.0] * RUN_SCRATCH, RUN_NODES, out, kind, a, b, c)
+    if out[-1] < 0:
+        out[0] = out[-1]
+    return out
+
+
+def _segments(v: list[float], n: int) -> tuple[ClothoidSegment, ...]:
+    return tuple(ClothoidSegment(v[3 * g], v[3 * g + 1], v[3 * g + 2]) for g in range(n))
 
 
 def random_path(

@@ -291,12 +291,15 @@ _RUN_NODES = families.RUN_SCRATCH
 
 
 @_jit
-def build_chain(
-    nodes: F64, out: F64, n: int, segs: F64, n_segs: int, x: float, y: float, th: float
-) -> tuple[float, float, float, float]:
-    """:func:`amigo_gym.paths.clothoid.chain_pieces`: the pieces into ``out``; ``(x, y, theta, length)``."""
+def build_flat(
+    nodes: F64, pv: F64, segs: F64, n_segs: int, n: int, m: int, total: float, spacing: float, x: float, y: float,
+    th: float, closed: bool,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`amigo_gym.paths.clothoid.build_flat` and its :func:`~amigo_gym.paths.clothoid.sample_points`."""
     buf = _carray(_stack_ptr(_POSE_NODES), _POSE_NODES)
-    return clothoid.chain_pieces(out, n, segs, n_segs, x, y, th, buf, nodes)
+    gap = clothoid.build_flat(pv, segs, n_segs, n, m, total, spacing, x, y, th, closed, buf, nodes)
+    clothoid.sample_points(buf, nodes, pv, clothoid.P_TAIL + 6 * n, m, spacing)
+    return gap
 
 
 @_jit
@@ -324,18 +327,48 @@ def build_samples(nodes: F64, pv: F64, o: int, count: int, spacing: float) -> No
 
 
 @_jit
-def build_run(nodes: F64, segs: F64, n_segs: int, x: float, y: float, th: float) -> tuple[float, float, float]:
-    """:func:`amigo_gym.paths.families.run_segments`: the end pose after the segments."""
+def build_family(nodes: F64, kind: int, a: float, b: float, c: float) -> F64:
+    """:func:`amigo_gym.paths.families.family_segments`: the segments, their number last (in ``[0]`` too if < 0)."""
     buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
-    return families.run_segments(buf, nodes, segs, n_segs, x, y, th)
+    out = np.empty(3 * families.FAMILY_SEGMENTS + 1)
+    g = families.family_segments(buf, nodes, out, kind, a, b, c)
+    out[-1] = g
+    if g < 0:
+        out[0] = g
+    return out
 
 
 @_jit
-def build_lane(nodes: F64, ratio: float) -> tuple[float, float, float, float]:
-    """:func:`amigo_gym.paths.families.lane_change_shape`: ``(x1, y1, theta_m, xm)``."""
+def family_rows(
+    run_nodes: F64, kinds: NDArray[np.int64], params: F64, sample_spacing: float, segs: F64, lay: F64
+) -> None:
+    """Each row's family path of :func:`amigo_gym.paths.families.family_segments` (``kinds (m,)``, ``params (m,
+    3)``): its segments into ``segs (m, 4 FAMILY_SEGMENTS)`` and :func:`amigo_gym.paths.clothoid.path_layout` into
+    ``lay (m, 6)``: ``n_segs, n, m, length, max |kappa|, spacing``; a row's ``n_segs < 0`` on an error."""
     buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
-    segs = _carray(_stack_ptr(6), 6)
-    return families.lane_change_shape(buf, nodes, segs, ratio)
+    out = np.empty(3 * families.FAMILY_SEGMENTS)
+    for i in range(len(kinds)):
+        g = families.family_segments(buf, run_nodes, out, kinds[i], params[i, 0], params[i, 1], params[i, 2])
+        lay[i, 0] = g
+        if g < 0:
+            continue
+        for j in range(g):
+            for q in range(3):
+                segs[i, 4 * j + q] = out[3 * j + q]
+        closed = families.family_start(kinds[i], params[i, 0])[3]
+        n, m, total, kmax, spacing = clothoid.path_layout(segs[i], g, sample_spacing, closed)
+        lay[i, 1], lay[i, 2], lay[i, 3], lay[i, 4], lay[i, 5] = n, m, total, kmax, spacing
+
+
+@_jit
+def family_fill(
+    nodes: F64, flat: F64, starts: NDArray[np.int64], kinds: NDArray[np.int64], params: F64, segs: F64, lay: F64
+) -> None:
+    """The flat vectors of :func:`family_rows`' paths into ``flat[starts[i]:]`` (:func:`build_flat`)."""
+    for i in range(len(kinds)):
+        x, y, th, closed = families.family_start(kinds[i], params[i, 0])
+        n, m = int(lay[i, 1]), int(lay[i, 2])
+        build_flat(nodes, flat[starts[i] :], segs[i], int(lay[i, 0]), n, m, lay[i, 3], lay[i, 5], x, y, th, closed)
 
 
 @_jit

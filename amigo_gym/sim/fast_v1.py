@@ -153,18 +153,23 @@ def path_loops() -> PathLoops:
     """The compiled path-building loops (:class:`amigo_gym.paths.clothoid.PathLoops`), their node tables bound; also
     installed for the column projection and pose (:func:`amigo_gym.paths.clothoid.use_compiled_rows`)."""
     kv = kernels()
-    nodes = np.array(fresnel.node_table(1), dtype=np.float64)
-    run_nodes = np.array(families.RUN_NODES, dtype=np.float64)
+    nodes, run_nodes = node_tables()
     loops = PathLoops(
-        chain=partial(kv.build_chain, nodes),
+        family=partial(kv.build_family, run_nodes),
+        flat=partial(kv.build_flat, nodes),
         samples=partial(kv.build_samples, nodes),
-        run=partial(kv.build_run, run_nodes),
-        lane=partial(kv.build_lane, run_nodes),
         locate=partial(kv.rows_locate, nodes),
         pose=partial(kv.rows_pose, nodes),
     )
     use_compiled_rows(loops)
     return loops
+
+
+@lru_cache(maxsize=1)
+def node_tables() -> tuple[Array, Array]:
+    """The path quadrature's node table (:func:`amigo_gym.model.fresnel.node_table` of 1) and
+    :data:`amigo_gym.paths.families.RUN_NODES`, as arrays."""
+    return np.array(fresnel.node_table(1), dtype=np.float64), np.array(families.RUN_NODES, dtype=np.float64)
 
 
 @lru_cache(maxsize=1)

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.paths.clothoid import ClothoidPath
+from amigo_gym.paths.clothoid import P_TAIL, SAMPLE_SPACING, ClothoidPath
+from amigo_gym.paths.families import FAMILY_SEGMENTS, SEGMENT_FAMILIES
 from amigo_gym.sim import fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
@@ -28,53 +29,77 @@ class PathArena:
         self.starts: IntArray = np.zeros(n, dtype=np.int64)
         self.stops: IntArray = np.zeros(n, dtype=np.int64)
         self._row_ids: list[int] = [0] * n  # id of each row's path (0: none)
-        self._live: dict[int, list[Any]] = {}
+        self._live: dict[int, list[Any]] = {}  # key (a path's id, or < 0 for a built row) -> [path, start, stop, rows]
         self._dead = 0
+        self._key = 0
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        new = {oid: id(entry[0]) for oid, entry in self._live.items()}
+        new = {oid: id(entry[0]) if oid > 0 else oid for oid, entry in self._live.items()}
         self._live = {new[oid]: entry for oid, entry in self._live.items()}
         self._row_ids = [new[oid] if oid else 0 for oid in self._row_ids]
 
     def assign(self, rows: Sequence[int], paths: Sequence[ClothoidPath]) -> None:
         """Rows ``rows`` take ``paths`` (:class:`ClothoidPath` objects, one each)."""
         for i, path in zip(rows, paths, strict=True):
-            old = self._row_ids[i]
-            if old == id(path) and old in self._live:
+            if self._row_ids[i] == id(path) and id(path) in self._live:
                 continue
-            if old:
-                entry = self._live[old]
-                entry[3] -= 1
-                self._row_ids[i] = 0  # (a compaction below skips the row)
-                if entry[3] == 0:
-                    del self._live[old]
-                    self._dead += entry[2] - entry[1]
+            self._release(i)
             got = self._live.get(id(path))
             if got is None:
-                start, stop = self._append(fast_v1.flat_path(path))
-                got = self._live[id(path)] = [path, start, stop, 0]
-            got[3] += 1
-            self._row_ids[i] = id(path)
-            self.starts[i] = got[1]
-            self.stops[i] = got[2]
+                vec = fast_v1.flat_path(path)
+                got = self._live[id(path)] = [path, *self._append(vec.shape[0]), 0]
+                self.flat[got[1] : got[2]] = vec
+            self._hold(i, id(path), got)
+
+    def build(self, rows: Sequence[int], kinds: IntArray, params: Array) -> None:
+        """Rows ``rows`` take the family paths of :func:`amigo_gym.paths.families.family_segments` (``kinds (m,)``,
+        ``params (m, 3)``; the paths ``make_family_path`` builds with the default sample spacing), built in place in two
+        compiled calls, one row each; ``ValueError`` naming a row whose parameters build no path."""
+        kv, (nodes, run_nodes) = fast_v1.kernels(), fast_v1.node_tables()
+        segs, lay = np.zeros((len(rows), 4 * FAMILY_SEGMENTS)), np.zeros((len(rows), 6))
+        kv.family_rows(run_nodes, kinds, params, SAMPLE_SPACING, segs, lay)
+        for j in np.flatnonzero(lay[:, 0] < 0.0).tolist():
+            fam = SEGMENT_FAMILIES[int(kinds[j])]
+            raise ValueError(f"PathArena.build: row {rows[j]}'s {fam} parameters {params[j].tolist()} build no path "
+                             f"(make_family_path({fam!r}, ...) names the one out of range)")  # fmt: skip
+        for i, size in zip(rows, (P_TAIL + 6 * lay[:, 1] + 2 * lay[:, 2]).astype(np.int64).tolist(), strict=True):
+            self._release(i)
+            self._key -= 1  # (path objects' keys are their ids, > 0)
+            self._hold(i, self._key, self._live.setdefault(self._key, [None, *self._append(size), 0]))
+        kv.family_fill(nodes, self.flat, self.starts[np.asarray(rows, dtype=np.intp)], kinds, params, segs, lay)
+
+    def _release(self, i: int) -> None:
+        old = self._row_ids[i]
+        if old:
+            entry = self._live[old]
+            entry[3] -= 1
+            self._row_ids[i] = 0  # (a compaction before the row's new path is held skips the row)
+            if entry[3] == 0:
+                del self._live[old]
+                self._dead += entry[2] - entry[1]
+
+    def _hold(self, i: int, key: int, entry: list[Any]) -> None:
+        entry[3] += 1
+        self._row_ids[i] = key
+        self.starts[i] = entry[1]
+        self.stops[i] = entry[2]
 
     def rows_on(self, path: ClothoidPath) -> int:
         """How many rows hold ``path``."""
         entry = self._live.get(id(path))
         return 0 if entry is None else int(entry[3])
 
-    def _append(self, vec: Array) -> tuple[int, int]:
+    def _append(self, length: int) -> tuple[int, int]:
         size = self.flat.shape[0]
-        if self.used + vec.shape[0] > size and 4 * (self.used - self._dead + vec.shape[0]) <= 3 * size:
+        if self.used + length > size and 4 * (self.used - self._dead + length) <= 3 * size:
             self._compact()
         start = self.used
-        stop = start + vec.shape[0]
+        stop = start + length
         if stop > size:
             grown = np.zeros(max(2 * size, stop))
             grown[:start] = self.flat[:start]
             self.flat = grown
-        self.flat[start:stop] = vec
         self.used = stop
         return start, stop
 
@@ -144,21 +169,25 @@ class BatchKernel:
         self.__dict__.update(state)
         self._bind()
 
-    def load(self, rows: Sequence[int], paths: Sequence[Any], st: tracking.State, ep: tracking.Episode) -> None:
-        """Start the episodes of ``rows``: their paths, states and episodes (``(m,)`` columns) into the block;
-        ``TypeError`` for a path the compiled step does not run (:func:`amigo_gym.sim.fast_v1.compiled_path`)."""
-        for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
-            if not fast_v1.compiled_path(path, self._k.params):
-                raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
+    def load(
+        self, rows: Sequence[int], paths: Sequence[Any] | None, st: tracking.State, ep: tracking.Episode
+    ) -> None:  # fmt: skip
+        """Start the episodes of ``rows``: their paths (None: in the arena already), states and episodes (``(m,)``
+        columns) into the block; ``TypeError`` for a path the compiled step does not run
+        (:func:`amigo_gym.sim.fast_v1.compiled_path`)."""
+        if paths is not None:
+            for i, path in {id(q): (i, q) for i, q in zip(rows, paths, strict=True)}.values():  # each path once
+                if not fast_v1.compiled_path(path, self._k.params):
+                    raise TypeError(f"BatchKernel.load: row {i}'s path {type(path).__name__} is not compiled")
+            self.arena.assign(rows, paths)
         r = np.asarray(rows, dtype=np.intp)
         fast_v1.load_rows(self.ws, r, st, ep, np.asarray(ep.l3) != self._k.l3)
         self.keys[r] = ep.key
-        self.arena.assign(rows, paths)
 
     def start(
         self,
         rows: Sequence[int],
-        paths: Sequence[Any],
+        paths: Sequence[Any] | None,
         st: tracking.State,
         ep: tracking.Episode,
         obs: NDArray[np.floating[Any]],

@@ -902,19 +902,34 @@ def draw_path(
     rng: np.random.Generator, p: TrackingParams, loops: PathLoops | None = None
 ) -> tuple[Any, dict[str, Any]]:
     """The episode's path and its ``info`` description (family, parameters), drawn from ``rng`` for ``"random"`` and
-    ``"mixed"``. ``loops``: the compiled path-building loops or None (the same path either way)."""
+    ``"mixed"`` (:func:`draw_family`). ``loops``: the compiled path-building loops or None (the same path either
+    way)."""
     if not isinstance(p.path, str) or p.path not in ("random", "mixed"):
         fam = p.path if isinstance(p.path, str) else getattr(p.path, "name", type(p.path).__name__)
         return fixed_path(p), {"family": fam}
+    info = draw_family(rng, p)
+    if info["family"] == "random":
+        return random_pool_path(p, info["id"], loops), info
+    # continuous parameters do not repeat: built, not cached
+    return FAMILIES[info["family"]].build(loops=loops, **info_params(info)), info
+
+
+def draw_family(rng: np.random.Generator, p: TrackingParams) -> dict[str, Any]:
+    """The description of the path of ``path="random"`` or ``"mixed"`` drawn from ``rng``: ``{"family": "random",
+    "id": pool number}`` or a family of :data:`MIXED_FAMILIES` with its drawn parameters (:data:`MIXED_RANGES`; a
+    circle's ``direction`` +-1)."""
     fam = "random" if p.path == "random" else MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]
     if fam == "random":
-        pid = int(rng.integers(p.random_pool))
-        return random_pool_path(p, pid, loops), {"family": "random", "id": pid}
+        return {"family": "random", "id": int(rng.integers(p.random_pool))}
     values: dict[str, Any] = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in MIXED_RANGES[fam].items()}
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
-    # continuous parameters do not repeat: built, not cached
-    return FAMILIES[fam].build(loops=loops, **values), {"family": fam, **values}
+    return {"family": fam, **values}
+
+
+def info_params(info: dict[str, Any]) -> dict[str, Any]:
+    """The family parameters of a path's description (:func:`draw_family`)."""
+    return {k: v for k, v in info.items() if k != "family"}
 
 
 def episode_draws(p: TrackingParams) -> tuple[list[tuple[float, float]], bool]:
