@@ -605,8 +605,7 @@ def identify(
     values = {n: float(v) for n, v in zip(names, sol.x, strict=True)}
     robot, act, _ = unpack(sol.x)
     fitted = tuple(names[:n_fit])
-    fixed = {k: float(nom[k]) for k in ("r1", "r2", "l1", "delay", "acceleration", "rot_acceleration")
-             if k not in fitted}  # fmt: skip
+    fixed = {k: float(v) for k, v in nom.items() if k not in fitted}
     _, before = replay(log, nominal, base_act, nominal)
     _, after = replay(log, robot, act, nominal)
     return Fit(robot, act, values, unc, fitted, fixed, before, after, float(sol.cost), n_res, int(sol.nfev), excited)

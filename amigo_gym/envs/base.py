@@ -91,8 +91,7 @@ def check_reset_mask(mask: Any, n: int) -> BoolArray:
         raise ValueError(
             f"`options['reset_mask']` must contain a boolean array with at least one True value, got reset_mask={mask}"
         )
-    out: BoolArray = mask.copy()
-    return out
+    return mask.copy()
 
 
 def parse_seeds(seed: Any, n: int) -> list[int | None]:

@@ -113,8 +113,7 @@ class Renderer:
     def _polygon(self, surf: Any, corners: NDArray[np.float64], fill: tuple[int, int, int], edge: Any) -> None:
         from pygame import gfxdraw
 
-        pts = [self._px(c) for c in corners]
-        ipts = [(round(x), round(y)) for x, y in pts]
+        ipts = [(round(x), round(y)) for x, y in map(self._px, corners)]
         gfxdraw.filled_polygon(surf, ipts, fill)
         gfxdraw.aapolygon(surf, ipts, edge)
 

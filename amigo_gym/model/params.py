@@ -87,10 +87,6 @@ def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
     return f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
 
 
-def _set(obj: object, name: str, value: object) -> None:
-    object.__setattr__(obj, name, value)
-
-
 @dataclass(frozen=True)
 class RobotParams:
     """Geometry and limits of the AmigoBot (paper's Table 1 and the real robot's data).
@@ -132,8 +128,8 @@ class RobotParams:
         for f in fields(self):
             low, high = SPEED_RANGE if f.name == "max_speed" else LIMIT_RANGE if f.name[:4] == "max_" else LENGTH_RANGE
             if f.name != "l4":
-                _set(self, f.name, check_real(o, f.name, getattr(self, f.name), low, high))
-        _set(self, "l4", check_real(o, "l4", self.l4, LIMIT_RANGE[0], self.r1, high_open=True))
+                object.__setattr__(self, f.name, check_real(o, f.name, getattr(self, f.name), low, high))
+        object.__setattr__(self, "l4", check_real(o, "l4", self.l4, LIMIT_RANGE[0], self.r1, high_open=True))
 
     @property
     def max_wheel_rate(self) -> float:

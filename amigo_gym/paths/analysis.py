@@ -13,7 +13,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model.kinematics import Real
+from amigo_gym.model.kinematics import Real, wheel_rates_of
 from amigo_gym.model.params import RobotParams, check_real
 from amigo_gym.paths.clothoid import PathSpec
 
@@ -247,10 +247,8 @@ def feasibility(
         acc = -v * sin_p * psi_t if on_h else np.zeros_like(psi)
         bdd = v * cos_p * psi_t / l3 if on_h else v * psi_t / (l3 * cos_p * cos_p)
         bd = v_h * sin_p / l3
-        w1 = (v_a + l1 * bd) / robot.r1
-        w2 = (v_a - l1 * bd) / robot.r2
-        wd1 = (acc + l1 * bdd) / robot.r1
-        wd2 = (acc - l1 * bdd) / robot.r2
+        w1, w2 = wheel_rates_of(v_a, bd, l1, robot.r1, robot.r2)
+        wd1, wd2 = wheel_rates_of(acc, bdd, l1, robot.r1, robot.r2)
     wheels = (np.maximum(np.abs(w1), np.abs(w2)), np.maximum(np.abs(wd1), np.abs(wd2)))
     series = dict(zip(QUANTITIES, (*wheels, np.abs(acc), np.abs(bd), np.abs(bdd)), strict=True))
     arg = {name: int(np.argmax(np.where(np.isfinite(f), f, np.inf))) for name, f in series.items()}

@@ -229,7 +229,6 @@ def fit_points(
     spline = CubicSpline(t, knots, bc_type="periodic" if closed else "not-a-knot")
     kk = np.abs(_curvature(spline, t)[2])
     turn_density = 1.5 * np.nan_to_num(np.maximum(kk[:-1], kk[1:]), nan=0.0) / MAX_STEP_TURN  # steps per metre
-    last_error = math.inf
     for _ in range(MAX_REFINEMENTS + 1):
         # steps of at most h_max chord and MAX_STEP_TURN turn, laid along the parameter
         dens = np.concatenate(([0.0], np.cumsum(chord * np.maximum(1.0 / h_max, turn_density))))
@@ -265,10 +264,9 @@ def fit_points(
             path = ClothoidPath(tuple(ClothoidSegment(*g) for g in segs), start=(start[0], start[1]),
                                 start_angle=theta0, closed=closed, sample_spacing=sample_spacing)  # fmt: skip
             return PointsFit(path, err, point_s, h_max, corr, smoothed)
-        last_error = err
         h_max = 0.5 * h_max
     raise ValueError(
-        f"{owner}: the fitted path passes {last_error:.3g} m from a point, above tolerance={tol:g} m after "
+        f"{owner}: the fitted path passes {err:.3g} m from a point, above tolerance={tol:g} m after "
         f"{MAX_REFINEMENTS} refinements; raise the tolerance or give denser points"
     )
 
@@ -299,8 +297,7 @@ def _close(
         jac = np.stack([(gap(coef + dc) - gap(coef - dc)) / (2.0 * eps) for dc in np.eye(nm) * eps], axis=1)
         coef = coef - np.linalg.pinv(jac) @ g  # the smallest correction (least squares over the modes)
         g = gap(coef)
-    k = kappa + coef @ modes
-    return k, tuple(coef.tolist())
+    return kappa + coef @ modes, tuple(coef.tolist())
 
 
 def from_points(

@@ -98,10 +98,9 @@ class UserPath:
         self._spacing = self.length / n
         js = np.arange(n + (0 if self.closed else 1), dtype=np.float64)
         samples = self.pose_columns(js * self._spacing)
-        sx, sy = (np.asarray(v, dtype=np.float64) for v in (samples.x, samples.y))
         # a flat path vector of no pieces (clothoid.PATH_HEADER; not a circle): the samples the projection searches
-        head = [0.0, float(sx.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0, 0.0, 0.0, 0.0]
-        self._flat = np.concatenate((head, sx, sy))
+        head = [0.0, float(js.size), self.length, 0.0, self._spacing, 1.0 if self.closed else 0.0, 0.0, 0.0, 0.0]
+        self._flat = np.concatenate((head, samples.x, samples.y))
         loc = self.locate(np.asarray(pose.x), np.asarray(pose.y), probe, 0.5, 0.5)
         _finite_column(loc.progress, probe.shape, f"{who}: locate(...).progress")
         self.locate(float(np.asarray(pose.x)[0]), float(np.asarray(pose.y)[0]), 0.0, 0.5, 0.5)

@@ -53,26 +53,29 @@ class Policy:
         """Forget the internal state (used when ``predict`` gets no ``state``)."""
         self._state = None
 
-    def _rows(self, n: int, state: Any, width: int) -> tuple[Array, bool]:
-        """The state ``(n, width)``: a copy of ``state``, or the internal state (zeros when new or resized), and
-        whether it was made new."""
+    def _rows(self, n: int, state: Any, episode_start: Any, width: int) -> tuple[Array, NDArray[np.bool_]]:
+        """The state ``(n, width)`` (a copy of ``state``, or the internal state: zeros when new or resized) and the
+        rows that start an episode: ``episode_start`` (a scalar is broadcast), None: every row of a new or all-zero
+        state."""
         if state is None:
-            fresh = self._state is None or self._state.shape[0] != n
-            if fresh:
+            if fresh := self._state is None or self._state.shape[0] != n:
                 self._state = np.zeros((n, width))
             assert self._state is not None
-            return self._state, fresh
-        s = np.asarray(state, dtype=np.float64)
-        if s.size != n * width:
-            raise ValueError(f"{self._fields.owner}: state must have shape ({n}, {width}), got {s.shape}")
-        return s.reshape(n, width).copy(), False
-
-    @staticmethod
-    def _starts(episode_start: Any, n: int, default: bool = False) -> NDArray[np.bool_]:
-        """``episode_start`` as ``(n,)`` booleans (a scalar is broadcast); None: ``default`` for every row."""
+            s = self._state
+        else:
+            s = np.asarray(state, dtype=np.float64)
+            if s.size != n * width:
+                raise ValueError(f"{self._fields.owner}: state must have shape ({n}, {width}), got {s.shape}")
+            s, fresh = s.reshape(n, width).copy(), not np.any(s)
         if episode_start is None:
-            return np.full(n, default)
-        return np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,)).copy()
+            return s, np.full(n, fresh)
+        return s, np.broadcast_to(np.asarray(episode_start, dtype=bool).reshape(-1), (n,)).copy()
+
+    def _keep(self, state: Any, new: Array) -> Array:
+        """``new`` as the internal state if ``predict`` got no ``state``; a copy of it (what ``predict`` returns)."""
+        if state is None:
+            self._state = new
+        return new.copy()
 
     def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Any]:
         """``(actions (N, 2) in [-1, 1], new state)`` for checked observations ``(N, d)``."""

@@ -151,13 +151,9 @@ class DelayCompensatedPolicy(Policy):
         return limit_wheel_rates(v, om, self.params), delay, quiet.astype(np.float64), new_state
 
     def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Array]:
-        n = obs.shape[0]
-        s, fresh = self._rows(n, state, self.state_dim)
-        starts = self._starts(episode_start, n, fresh or (state is not None and not np.any(s)))
+        s, starts = self._rows(obs.shape[0], state, episode_start, self.state_dim)
         a, _, _, s_new = self.compensate(obs, s, starts)
-        if state is None:
-            self._state = s_new
-        return a, s_new.copy()
+        return a, self._keep(state, s_new)
 
     def __repr__(self) -> str:
         return f"DelayCompensatedPolicy(gain={self.gain:g}, quiet={self.quiet:g})"

@@ -227,17 +227,14 @@ class FastPolicy(Policy):
 
     def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Array]:
         b = self.builder
-        n = obs.shape[0]
-        s, fresh = self._rows(n, state, b.state_dim)
-        starts = self._starts(episode_start, n, fresh or (state is not None and not np.any(s)))
+        s, starts = self._rows(obs.shape[0], state, episode_start, b.state_dim)
         feats, base, s_new = b(obs, s, starts)
         u = self.mean_output(feats)
         if not deterministic:
             u = u + np.exp(self.log_std) * self._rng.standard_normal(u.shape)
-        if state is None:
-            self._state = s_new
         prev, sp = b.previous_command(obs), self.spec
-        return env_action(u, base, prev, sp.residual_bound, sp.filter_alpha, b.correcting(feats)), s_new.copy()
+        a = env_action(u, base, prev, sp.residual_bound, sp.filter_alpha, b.correcting(feats))
+        return a, self._keep(state, s_new)
 
     def save(self, path: str | Path) -> None:
         """Write the model zip atomically (``model.json`` + ``weights.npz``)."""

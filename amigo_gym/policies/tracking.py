@@ -100,13 +100,9 @@ class AnalyticTrackingPolicy(Policy):
         return v, om, z_new
 
     def _act(self, obs: Array, state: Any, episode_start: Any, deterministic: bool) -> tuple[Array, Array]:
-        n = obs.shape[0]
-        z, _ = self._rows(n, state, 1)
-        z = np.where(self._starts(episode_start, n), 0.0, z[:, 0])
-        v, om, z_new = self.command(obs, z)
-        if state is None:
-            self._state = z_new.reshape(n, 1)
-        return limit_wheel_rates(v, om, self.params), z_new.reshape(n, 1).copy()
+        z, starts = self._rows(obs.shape[0], state, episode_start, 1)
+        v, om, z_new = self.command(obs, np.where(starts, 0.0, z[:, 0]))
+        return limit_wheel_rates(v, om, self.params), self._keep(state, z_new[:, None])
 
     def __repr__(self) -> str:
         return (

@@ -154,11 +154,8 @@ class TrapezoidProfile:
         v = float(self.speed)
         ts, tc = self.t_start, self.t_cruise
         tt = np.minimum(t, self.t_brake) if self.t_brake is not None else t
-        if self.accel is None:
-            dist = v * np.maximum(tt - ts, 0.0)
-        else:
-            ramp = np.clip(tt - ts, 0.0, tc - ts)
-            dist = 0.5 * self.accel * ramp**2 + v * np.maximum(tt - tc, 0.0)
+        ramp = np.clip(tt - ts, 0.0, tc - ts)  # 0 for a step (tc = ts)
+        dist = 0.5 * (self.accel or 0.0) * ramp**2 + v * np.maximum(tt - tc, 0.0)
         if self.t_brake is not None:
             tb = np.clip(t - self.t_brake, 0.0, v / self.decel)
             dist = dist + v * tb - 0.5 * self.decel * tb**2
