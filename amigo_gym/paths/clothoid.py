@@ -640,30 +640,14 @@ def build_flat(
     (:func:`chain_pieces`). Returns a closed path's distance [m] and heading difference [rad] from its end pose to its
     start's modulo ``2 pi`` (0, 0 if open)."""
     xe, ye, the = chain_pieces(pv, n, segs, n_segs, x, y, th, buf, nodes)
-    turn = the - th
-    gap = 0.0
-    turn_gap = 0.0
-    if closed:
-        turn = TWO_PI * math.floor(turn / TWO_PI + 0.5)
-        gap = math.hypot(xe - x, ye - y)
-        turn_gap = the - th - turn
-    # a closed path of arcs of one curvature k (a circle): k and its centre
-    k = segs[1]
+    turn = TWO_PI * math.floor((the - th) / TWO_PI + 0.5) if closed else the - th
+    k = segs[1] if closed else 0.0  # a closed path of arcs of one curvature k (a circle): k and its centre
     for g in range(n_segs):
-        if segs[4 * g + 1] != k or segs[4 * g + 2] != 0.0:
-            k = 0.0
-    if not closed:
-        k = 0.0
-    pv[P_N] = float(n)
-    pv[P_M] = float(m)
-    pv[P_LENGTH] = total
-    pv[P_TURN] = turn
-    pv[P_SPACING] = spacing
-    pv[P_CLOSED] = 1.0 if closed else 0.0
-    pv[P_CIRCLE_K] = k
-    pv[P_CIRCLE_X] = x - math.sin(th) / k if k != 0.0 else 0.0
-    pv[P_CIRCLE_Y] = y + math.cos(th) / k if k != 0.0 else 0.0
-    return gap, turn_gap
+        k = k if segs[4 * g + 1] == k and segs[4 * g + 2] == 0.0 else 0.0
+    cx, cy = (x - math.sin(th) / k, y + math.cos(th) / k) if k != 0.0 else (0.0, 0.0)
+    for j, v in enumerate((float(n), float(m), total, turn, spacing, 1.0 if closed else 0.0, k, cx, cy)):
+        pv[j] = v  # the header, in PATH_HEADER's order
+    return (math.hypot(xe - x, ye - y), the - th - turn) if closed else (0.0, 0.0)
 
 
 def chain_pieces(

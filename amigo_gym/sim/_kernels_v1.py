@@ -328,13 +328,10 @@ def build_samples(nodes: F64, pv: F64, o: int, count: int, spacing: float) -> No
 
 @_jit
 def build_family(nodes: F64, kind: int, a: float, b: float, c: float) -> F64:
-    """:func:`amigo_gym.paths.families.family_segments`: the segments, their number last (in ``[0]`` too if < 0)."""
+    """:func:`amigo_gym.paths.families.family_segments`: the segments, their number last."""
     buf = _carray(_stack_ptr(_RUN_NODES), _RUN_NODES)
     out = np.empty(3 * families.FAMILY_SEGMENTS + 1)
-    g = families.family_segments(buf, nodes, out, kind, a, b, c)
-    out[-1] = g
-    if g < 0:
-        out[0] = g
+    out[-1] = families.family_segments(buf, nodes, out, kind, a, b, c)
     return out
 
 

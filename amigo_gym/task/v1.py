@@ -911,7 +911,7 @@ def draw_path(
     if info["family"] == "random":
         return random_pool_path(p, info["id"], loops), info
     # continuous parameters do not repeat: built, not cached
-    return FAMILIES[info["family"]].build(loops=loops, **info_params(info)), info
+    return FAMILIES[info["family"]].build(loops=loops, **{k: v for k, v in info.items() if k != "family"}), info
 
 
 def draw_family(rng: np.random.Generator, p: TrackingParams) -> dict[str, Any]:
@@ -925,11 +925,6 @@ def draw_family(rng: np.random.Generator, p: TrackingParams) -> dict[str, Any]:
     if fam == "circle":
         values["direction"] = 1 if int(rng.integers(2)) == 0 else -1
     return {"family": fam, **values}
-
-
-def info_params(info: dict[str, Any]) -> dict[str, Any]:
-    """The family parameters of a path's description (:func:`draw_family`)."""
-    return {k: v for k, v in info.items() if k != "family"}
 
 
 def episode_draws(p: TrackingParams) -> tuple[list[tuple[float, float]], bool]:
