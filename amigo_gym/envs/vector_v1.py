@@ -157,7 +157,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         # on a fixed path, the episode every start draws but its offsets, and as columns of one row
         self._template = None if fixed is None else tracking.episode_template(p)
         self._template_row = None if self._template is None else _columns(tracking.Episode, self._template, 1)
-        self._templated = False  # every row's episode is the template (restarts need not write it)
         n = self.num_envs = int(num_envs)
         self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         self.render_mode = render_mode
@@ -193,7 +192,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         compiled = fixed is None or fast_v1.compiled_path(fixed, p)  # drawn paths are built-in ones
         if fast_v1.use_kernel(owner, "numba" if kernel == "numba-parallel" else kernel) and compiled:
             self._batch = fast_v1_batch.BatchKernel(self._k, n, parallel=kernel == "numba-parallel")
-            self._state = self._state_views(self._state.steps)
+            self._state, self._episode = self._block_views(self._state.steps)
         elif fast_v1.use_fast_path(None):
             fast_v1.path_loops()
         #: the AmigoBot-v0 task these settings are (:func:`amigo_gym.task.v1.v0_settings`), or None
@@ -392,7 +391,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 self._goal[:] = tracking.goal_point(k.params, path)
             u_all = self._draws(idx, _U3, False)[0]
             if pose_opt is None:  # the start states and their evaluation in one compiled call
-                return self._started(idx, b.restart(rows, path, self._template_row, u_all, obs), None, template)
+                return self._started(idx, b.restart(rows, path, self._template_row, u_all, obs))
             ep_all = tracking.Episode(*(np.repeat(c, m) for c in self._template_row))
         else:  # each row draws its path and episode; the family paths built in the arena, the others held there
             held: list[tuple[int, Any]] = []
@@ -427,11 +426,11 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             st = tracking.placed_state(k, path, ep_all, st, tuple(pose_opt[idx].T), fns[0])
         st_all = _columns(tracking.State, st, m)
         if template is not None:
-            return self._started(idx, b.start(rows, paths, st_all, ep_all, obs), st_all, ep_all)
+            return self._started(idx, b.start(rows, paths, st_all, ep_all, obs))
         if k.params.goal_tolerance > 0.0:  # the ends of the open paths (tracking.goal_point)
             ends = pose_columns_of(flat, at, flat[at + P_LENGTH])
             self._goal[idx] = np.where((flat[at + P_CLOSED] == 0.0)[:, None], np.c_[ends.x, ends.y], np.nan)
-        return self._started(idx, b.start(rows, None, st_all, ep_all, obs), st_all, ep_all)
+        return self._started(idx, b.start(rows, None, st_all, ep_all, obs))
 
     def _draws(self, idx: NDArray[np.intp], intervals: list[Any], keyed: bool) -> tuple[Array, NDArray[np.uint64]]:
         # each row's draws (m, q) of the intervals (lo, hi) and key (0 unless keyed), as numpy's: one compiled call
@@ -442,25 +441,25 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         fast_v1.kernels().draw_uniforms(ptrs[idx], np.array(intervals), out, keys[: len(keys) * keyed])
         return out, keys
 
-    def _started(self, idx: NDArray[np.intp], rec: Array, st: tracking.State | None, ep: Any) -> Array:
-        # the rows' columns (_set_rows) and their start records: the command being executed, no slip
-        self._set_rows(idx, st, ep)
+    def _started(self, idx: NDArray[np.intp], rec: Array) -> Array:
+        # the compiled step's rows began (their states and episodes are in its block): their step counts, command
+        # rings and start records (the command being executed, no slip)
+        np.asarray(self._state.steps)[idx] = 0
+        self._start_rings(idx)
         rec[:, _R_COMMAND] = self._ring[idx, 0]  # (a1, a2) w_max
         rec[:, _R_SLIP] = 0.0
         return rec
 
-    def _set_rows(self, idx: NDArray[np.intp], st: tracking.State | None, ep: tracking.Episode) -> None:
-        # st None: the start states are in the compiled step's block (self._state's columns are its rows)
-        if st is None:
-            np.asarray(self._state.steps)[idx] = 0
-        else:
-            for name, col in zip(_STATE_FIELDS, st, strict=True):
-                np.asarray(getattr(self._state, name))[idx] = col
-        if ep is not self._template or not self._templated:
-            for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
-                np.asarray(getattr(self._episode, name))[idx] = col
-        self._templated = ep is self._template and (self._templated or len(idx) == self.num_envs)
-        # the command the robot was executing before the first step: its wheels' state (0 at rest)
+    def _set_rows(self, idx: NDArray[np.intp], st: tracking.State, ep: tracking.Episode) -> None:
+        # the reference route's rows began: their state and episode columns, command rings
+        for name, col in zip(_STATE_FIELDS, st, strict=True):
+            np.asarray(getattr(self._state, name))[idx] = col
+        for name, col in zip(_EPISODE_FIELDS, ep, strict=True):
+            np.asarray(getattr(self._episode, name))[idx] = col
+        self._start_rings(idx)
+
+    def _start_rings(self, idx: NDArray[np.intp]) -> None:
+        # the command each robot was executing before its first step: its wheels' state (0 at rest)
         w_max = self._k.w_max
         self._ring[idx, :, 0] = (np.asarray(self._state.a1)[idx] * w_max)[:, None]
         self._ring[idx, :, 1] = (np.asarray(self._state.a2)[idx] * w_max)[:, None]
@@ -534,10 +533,12 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             infos = record_info(rec, rec.T[layout_v1.R_ERROR :], time, true_robot, delay, rec[:, _R_END])
         return infos, rec[:, _R_REWARD].copy(), rec[:, _R_TERM] != 0.0
 
-    def _state_views(self, steps: NDArray[np.int64]) -> tracking.State:
+    def _block_views(self, steps: NDArray[np.int64]) -> tuple[tracking.State, tracking.Episode]:
+        # the state and episode columns as views of the compiled step's block (its keys for the episodes' key)
         assert self._batch is not None
         rows = self._batch.rows
-        return tracking.State._make([*(getattr(rows, name) for name in _STATE_FIELDS[:-1]), steps])
+        ep = tracking.Episode._make(self._batch.keys if f == "key" else getattr(rows, f) for f in _EPISODE_FIELDS)
+        return tracking.State._make([*(getattr(rows, name) for name in _STATE_FIELDS[:-1]), steps]), ep
 
     def _append_trail(self) -> None:
         length = max(1, int(self.trail_length))
@@ -601,6 +602,6 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         self.__dict__.update(state)
         self._draw_ptrs = np.zeros(self.num_envs, dtype=np.int64)  # the generators are new objects
         if self._batch is not None:  # the state columns are views of the block's rows again
-            self._state = self._state_views(np.asarray(self._state.steps))
+            self._state, self._episode = self._block_views(np.asarray(self._state.steps))
         elif fast_v1.use_fast_path(None):
             fast_v1.path_loops()
