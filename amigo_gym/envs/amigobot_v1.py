@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from amigo_gym.envs.base import RENDER_MODES, Array, ObsArray, box_spaces, check_reset_options, parse_pose_option
+from amigo_gym.envs.rendering import Renderer
 from amigo_gym.envs.spec import JsonSpecMixin
 from amigo_gym.model.kinematics import advance_angle, body_velocity_of, castor_rate_float
 from amigo_gym.model.randomization import StepNoise
@@ -205,7 +206,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self.metadata = {**type(self).metadata, "render_fps": 1.0 / p.dt}
         self.action_space, self.observation_space = box_spaces(tracking.obs_bounds(p))  # type: ignore[assignment]
         self._trail: deque[tuple[float, float]] = deque(maxlen=self.trail_length)
-        self._renderer: Any = None
+        self._renderer: Renderer | None = None
         self._needs_reset = True
         self._ended: bool | None = False  # None: terminated and warned
         self._k = tracking.constants(p)
@@ -270,8 +271,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         self._needs_reset = False
         self._ended = False
         self._trail.clear()
-        hx, hy = info["h_position"].tolist()
-        self._trail.append((hx, hy))
+        self._trail.append(tuple(info["h_position"].tolist()))
         if self.render_mode == "human":
             self.render()
         return obs, info
@@ -295,8 +295,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             self._ended = None  # warned: once per episode
         obs, reward, terminated, info = self._advance(a1, a2)
         if self.render_mode is not None:
-            hx, hy = info["h_position"].tolist()
-            self._trail.append((hx, hy))
+            self._trail.append(tuple(info["h_position"].tolist()))
             if self.render_mode == "human":
                 self.render()
         if terminated and self._ended is False:
@@ -346,8 +345,7 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
         time = self._steps * self.params.dt
         if self.v0_params is not None:
             return v0_record_info(rec, v, time)
-        path = self._path_info.copy()
-        return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, path)
+        return record_info(rec, v, time, self._true_robot.copy(), self._delay, v[_END] != 0.0, self._path_info.copy())
 
     def _current_state(self) -> tracking.State:
         """The state of the episode (:class:`amigo_gym.task.v1.State` of floats); ``ResetNeeded`` before a reset."""
@@ -380,13 +378,10 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             return None
         if self._needs_reset:
             raise gym.error.ResetNeeded(f"{type(self).__name__}: call reset() before render()")
-        from amigo_gym.envs.rendering import Renderer
-
         if self._renderer is None or self._renderer.path is not self.path:
             self.close()
             self._renderer = Renderer(self.params, self.path, self.render_mode)
-        frame: NDArray[np.uint8] | None = self._renderer.draw(trail=self._trail, **self._render_state())
-        return frame
+        return self._renderer.draw(trail=self._trail, **self._render_state())
 
     def close(self) -> None:
         """Close the render window, if any."""

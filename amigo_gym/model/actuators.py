@@ -159,8 +159,7 @@ def ring_read(ring: NDArray[np.float64], step: int, lag: int | NDArray[np.int64]
         raise ValueError(f"ring of {length} commands cannot serve a lag of {lag!r} steps (needs lag + 2)")
     i_old, i_new = ring_read_slots(step, lags, length)
     if ring.ndim == 2:
-        (w1_old, w2_old), (w1_new, w2_new) = ring[int(i_old)].tolist(), ring[int(i_new)].tolist()
-        return w1_old, w2_old, w1_new, w2_new
+        return (*ring[int(i_old)].tolist(), *ring[int(i_new)].tolist())
     rows = np.arange(ring.shape[0])
     old, new = ring[rows, i_old], ring[rows, i_new]
     return old[:, 0].copy(), old[:, 1].copy(), new[:, 0].copy(), new[:, 1].copy()
@@ -203,8 +202,7 @@ def actuator_step(
         x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_switch, r1_true, r2_true, l1_true, slip1, slip2
     )  # fmt: skip
     if any_array(*cols):  # columns: every input and output an array of the broadcast shape
-        arrays = np.broadcast_arrays(*(np.asarray(c, dtype=np.float64) for c in cols))
-        cols = tuple(np.array(a, dtype=np.float64) for a in arrays)
+        cols = tuple(np.array(a, dtype=np.float64) for a in np.broadcast_arrays(*cols))
     else:
         cols = tuple(float(c) for c in cols)
     x, y, beta, w1, w2, w1c_old, w2c_old, w1c_new, w2c_new, t_s, r1t, r2t, l1t, s1, s2 = cols
@@ -282,12 +280,9 @@ def _channel_ws(
     ``ws[k : k + 19]``; returns the value at ``dt``."""
     ta1, tb1, ua1, ub1, sa1, sb1 = ramp(u0, c_old, accel, decel, t_s)
     ta2, tb2, ua2, ub2, sa2, sb2 = ramp(ub1, c_new, accel, decel, dt - t_s)
-    for i, knot in enumerate((0.0, ta1, tb1, t_s, np.minimum(t_s + ta2, dt), np.minimum(t_s + tb2, dt), dt)):
-        ws[k + i] = knot
-    for i, value in enumerate((u0, ua1, ub1, ub1, ua2, ub2)):
-        ws[k + 7 + i] = value
-    for i, slope in enumerate((sa1, sb1, 0.0, sa2, sb2, 0.0)):
-        ws[k + 13 + i] = slope
+    knots = (0.0, ta1, tb1, t_s, np.minimum(t_s + ta2, dt), np.minimum(t_s + tb2, dt), dt)
+    for i, entry in enumerate((*knots, u0, ua1, ub1, ub1, ua2, ub2, sa1, sb1, 0.0, sa2, sb2, 0.0)):
+        ws[k + i] = entry
     return ub2
 
 
@@ -352,10 +347,8 @@ def actuator_step_ws(
         v, a = _evaluate_ws(ws, kv, t0, mid)
         om, al = _evaluate_ws(ws, kw, t0, mid)
         # nominal wheel rates p_i + q_i tau; true speeds vt + at tau = (g1 w1 + g2 w2) / 2, wt + alt tau (/ 2 l1t)
-        p1 = (v + l1n * om) / r1n
-        q1 = (a + l1n * al) / r1n
-        p2 = (v - l1n * om) / r2n
-        q2 = (a - l1n * al) / r2n
+        p1, p2 = wheel_rates_of(v, om, l1n, r1n, r2n)
+        q1, q2 = wheel_rates_of(a, al, l1n, r1n, r2n)
         vt = 0.5 * (g1 * p1 + g2 * p2)
         at = 0.5 * (g1 * q1 + g2 * q2)
         wt = (g1 * p1 - g2 * p2) * inv_2l1t

@@ -105,14 +105,9 @@ def cos_sin_nodes(buf: Buffer, b: int, n: int, m: int) -> None:
     """``buf[b + m + i] = cos(buf[b + i])``, ``buf[b + 2 m + i] = sin(buf[b + i])`` for ``i < n``; floats or columns."""
     lst = cast("list[Any]", buf)
     arr = np.array(lst[b : b + n])
-    cos = np.cos(arr)
-    sin = np.sin(arr)
-    if arr.ndim > 1:  # a list of columns (fresnel.advance of columns): the rows
-        lst[b + m : b + m + n] = list(cos)
-        lst[b + 2 * m : b + 2 * m + n] = list(sin)
-        return
-    lst[b + m : b + m + n] = cos.tolist()
-    lst[b + 2 * m : b + 2 * m + n] = sin.tolist()
+    rows = list if arr.ndim > 1 else np.ndarray.tolist  # columns (fresnel.advance of columns): the rows; else floats
+    lst[b + m : b + m + n] = rows(np.cos(arr))
+    lst[b + 2 * m : b + 2 * m + n] = rows(np.sin(arr))
 
 
 def node_phases(

@@ -10,13 +10,12 @@ compiled (numba).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NamedTuple, TypeAlias
+from typing import Any, NamedTuple, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-if TYPE_CHECKING:
-    from amigo_gym.model.params import RobotParams
+from amigo_gym.model.params import RobotParams
 
 Array = NDArray[np.float64]
 
@@ -202,8 +201,7 @@ def step_pose(pose: ArrayLike, w: ArrayLike, dt: ArrayLike, robot: RobotParams) 
     held (heading not wrapped): ``d beta = betadot dt``, ``d A = v_A dt sinc(d beta / 2) (cos, sin)(beta + d beta / 2)``
     (:func:`arc_step`)."""
     p = np.asarray(pose, dtype=np.float64)
-    w = np.asarray(w, dtype=np.float64)
-    v, bdot = body_velocity_columns(w[..., 0], w[..., 1], robot)
+    v, bdot = body_velocity(w, robot)
     new = arc_step(p[..., 0], p[..., 1], p[..., 2], v, bdot, np.asarray(dt, dtype=np.float64), with_heading=False)
     return pack(new.x, new.y, new.beta)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import lru_cache, partial
 from types import ModuleType
 from typing import Any
@@ -19,6 +19,7 @@ from amigo_gym.paths import CirclePath, ManoeuvrePath, families
 from amigo_gym.paths.classic import PathPose
 from amigo_gym.paths.clothoid import ClothoidPath, PathLoops, use_compiled_rows
 from amigo_gym.sim import layout_v1
+from amigo_gym.sim.layout import kernel_cache
 from amigo_gym.task import v1 as tracking
 
 Array = NDArray[np.float64]
@@ -50,9 +51,7 @@ def use_fast_path(requested: bool | None = None) -> bool:
         mode = os.environ.get(KERNEL_ENV, "auto").strip().lower() or "auto"
         if mode not in KERNELS:
             raise ValueError(f"{KERNEL_ENV} must be 'auto', 'numba' or 'numpy', got {mode!r}")
-        if mode == "numpy":
-            return False
-        requested = True if mode == "numba" else None
+        requested = None if mode == "auto" else mode == "numba"
     if requested is False:
         return False
     if numba_available():
@@ -84,16 +83,12 @@ COMPILE_NOTICE = (
     "amigo_gym: compiling the numba step (once per install, up to about 20 s; "
     "later runs load it from numba's cache; AMIGO_GYM_KERNEL=numpy skips it)"
 )
-_notice_installed = False
 
 
+@lru_cache(maxsize=1)
 def announce_compilation() -> None:
     """Print :data:`COMPILE_NOTICE` once to stderr when numba compiles (not loads from its cache) a kernel of
     ``amigo_gym``: when stderr is a terminal, or ``AMIGO_GYM_COMPILE_NOTICE=1`` (``0`` silences it)."""
-    global _notice_installed
-    if _notice_installed:
-        return
-    _notice_installed = True
     wanted = os.environ.get("AMIGO_GYM_COMPILE_NOTICE")
     if wanted == "0" or (wanted != "1" and not (sys.stderr is not None and sys.stderr.isatty())):
         return
@@ -176,8 +171,6 @@ def node_tables() -> tuple[Array, Array]:
 def kernels() -> ModuleType:
     """The compiled kernels, :mod:`amigo_gym.sim._kernels_v1` (imports numba on the first call)."""
     announce_compilation()
-    from amigo_gym.sim.layout import kernel_cache
-
     with kernel_cache():
         import amigo_gym.sim._kernels_v1 as kv
 
@@ -198,7 +191,6 @@ def kernel_constants(k: tracking.Constants) -> Array:
     n = k.nominal
     act = p.actuators
     rz = p.randomize
-    table = fresnel.step_table(k.n_sub)
     head = [  # in the order of layout_v1.CONSTANT_FIELDS, line by line
         p.dt, k.w_max, n.r1, n.r2, n.l1, 2.0 * n.l1,
         act.acceleration, act.deceleration, act.rot_acceleration, act.rot_deceleration,
@@ -212,7 +204,7 @@ def kernel_constants(k: tracking.Constants) -> Array:
         kind,
         cx, cy, r0x, r0y, float(circle.direction), circle.radius, straight,
     ]  # fmt: skip
-    tail = [*p.preview, *k.preview_bounds, *table, *fresnel.node_table(1)]
+    tail = [*p.preview, *k.preview_bounds, *fresnel.step_table(k.n_sub), *fresnel.node_table(1)]
     return np.array(head + tail, dtype=np.float64)
 
 
@@ -263,7 +255,7 @@ class StepKernel:
         kv = kernels()
         self.rows = layout_v1.Rows(*self.ws)
         self.evaluate: Any = kv.evaluate
-        self.locate_progress: Any = kv.progress
+        self.locate_progress: Callable[..., float] = kv.progress
         self.path_pose: Any = kv.pose
         self._args()
         self.run_record: Any = direct_call(kv.step_record, 0, 0.0, 0.0, *self.args)
@@ -271,10 +263,8 @@ class StepKernel:
         self.scalars: Array = self.record[layout_v1.R_ERROR :]
 
     def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        for name in ("rows", "evaluate", "locate_progress", "path_pose", "scalars", "args", "run_record", "_fill"):
-            del state[name]
-        return state
+        bound = ("rows", "evaluate", "locate_progress", "path_pose", "scalars", "args", "run_record", "_fill")
+        return {k: v for k, v in self.__dict__.items() if k not in bound}  # _bind remakes them
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
@@ -286,8 +276,7 @@ class StepKernel:
     def progress(self, path: Any, x: float, y: float, hint: float) -> float:
         """H's progress [m] at ``(x, y)`` from ``hint`` (:data:`amigo_gym.task.v1.ProgressFn`)."""
         if type(path) is ClothoidPath:
-            s: float = self.locate_progress(self.consts, flat_path(path), x, y, hint)
-            return s
+            return self.locate_progress(self.consts, flat_path(path), x, y, hint)
         got: float = path.locate(x, y, hint, self.window, self.window).progress
         return got
 

@@ -22,15 +22,14 @@ CONSTANT_FIELDS: tuple[str, ...] = (
     # the circle's centre [m], unit start radius, direction (+1 left), radius [m]; the manoeuvre's straight part [m]
     "cx", "cy", "r0x", "r0y", "direction", "radius", "straight_length",
 )  # fmt: skip
-_C = {name: i for i, name in enumerate(CONSTANT_FIELDS)}
-C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = (_C[n] for n in CONSTANT_FIELDS[0:6])
-C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = (_C[n] for n in CONSTANT_FIELDS[6:12])
-C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_SIG_T, C_SIG_V = (_C[n] for n in CONSTANT_FIELDS[12:18])
-C_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = (_C[n] for n in CONSTANT_FIELDS[18:23])
-C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = (_C[n] for n in CONSTANT_FIELDS[23:26])
-C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = (_C[n] for n in CONSTANT_FIELDS[26:29])
-C_IDEAL, C_OBS_V0, C_REWARD_V0, C_L5, C_R3, C_PATH_KIND = (_C[n] for n in CONSTANT_FIELDS[29:35])
-C_CX, C_CY, C_R0X, C_R0Y, C_DIRECTION, C_RADIUS, C_STRAIGHT = (_C[n] for n in CONSTANT_FIELDS[35:42])
+C_DT, C_W_MAX, C_R1, C_R2, C_L1, C_TWO_L1 = range(0, 6)
+C_ACC, C_DEC, C_RACC, C_RDEC, C_L3, C_ERROR_SCALE = range(6, 12)
+C_E_MAX, C_TERM, C_PREVIEW_SCALE, C_V_MAX, C_SIG_T, C_SIG_V = range(12, 18)
+C_SMOOTH_SQ, C_TRAPEZOID, C_PACC, C_PDEC, C_WINDOW = range(18, 23)
+C_LOOKAHEAD, C_N_PREVIEW, C_N_NODES = range(23, 26)
+C_POS_NOISE, C_HEAD_NOISE, C_RATE_NOISE = range(26, 29)
+C_IDEAL, C_OBS_V0, C_REWARD_V0, C_L5, C_R3, C_PATH_KIND = range(29, 35)
+C_CX, C_CY, C_R0X, C_R0Y, C_DIRECTION, C_RADIUS, C_STRAIGHT = range(35, 42)
 #: values of ``consts[C_PATH_KIND]``: a :class:`~amigo_gym.paths.ClothoidPath` (its flat vector), a
 #: :class:`~amigo_gym.paths.CirclePath` or a :class:`~amigo_gym.paths.ManoeuvrePath` (closed forms of the constants)
 PATH_CLOTHOID, PATH_CIRCLE, PATH_MANOEUVRE = 0.0, 1.0, 2.0

@@ -99,7 +99,7 @@ def check_v0(**settings: Any) -> dict[str, Any]:
     d = s["direction"]
     if isinstance(d, bool) or not isinstance(d, numbers.Integral) or d not in (1, -1):
         raise ValueError(f"{o}.direction must be +1 (left turn) or -1 (right), got {show_value(d)}")
-    s["direction"] = int(d)
+    s["direction"] = d = int(d)
     if not isinstance(s["path"], str) or s["path"] not in ("circle", "manoeuvre"):
         raise ValueError(f"{o}.path must be 'circle' or 'manoeuvre', got {show_value(s['path'])}")
     # drivable: the straight roll at the start, the exact steady state on the circle; the rates are linear in the
@@ -114,7 +114,7 @@ def check_v0(**settings: Any) -> dict[str, Any]:
             f"{o}: speed {v:g} m/s rolling straight needs {need:.3g} rad/s on the smaller wheel "
             f"(r = {r_min:g} m), over {limit}; at most {v * w_max / need:.3g} m/s fits"
         )
-    rates = circle_steady_state(radius, v, robot, s["direction"]).wheel_rates.tolist()
+    rates = circle_steady_state(radius, v, robot, d).wheel_rates.tolist()
     need = max(abs(rates[0]), abs(rates[1]))
     if not need <= w_max:
         raise ValueError(
@@ -122,7 +122,6 @@ def check_v0(**settings: Any) -> dict[str, Any]:
             f"wheel, over {limit}; at most {v * w_max / need:.3g} m/s fits this circle"
         )
     straight = s.pop("straight_length")
-    d = s["direction"]
     s["path"] = CirclePath(radius, direction=d) if s["path"] == "circle" else ManoeuvrePath(radius, straight, d)
     return s
 
@@ -213,12 +212,8 @@ def bound_angle(b: Real) -> Real:
     """A heading ``b`` [rad] (float or column), unwrapped, reduced to ``b - 2 pi round(b / 2 pi)`` where ``|b| >
     HEADING_LIMIT`` (1e6 rad) so float64 keeps resolving a step's turn; ``b`` itself when nothing is reduced."""
     if isinstance(b, np.ndarray):
-        if b.size == 0 or (b.max() <= HEADING_LIMIT and b.min() >= -HEADING_LIMIT):
-            return b
         big = np.abs(b) > HEADING_LIMIT
-        nb = b.copy()
-        nb[big] = b[big] - TWO_PI * np.round(b[big] / TWO_PI)
-        return nb
+        return np.where(big, b - TWO_PI * np.round(b / TWO_PI), b) if big.any() else b
     return bound_angle_float(b)
 
 

@@ -47,12 +47,13 @@ from collections import OrderedDict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any, Literal, NamedTuple
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from amigo_gym.model import actuators
+from amigo_gym.logs import load_robot_file
+from amigo_gym.model import actuators, randomization
 from amigo_gym.model.actuators import ActuatorParams
 from amigo_gym.model.kinematics import (
     Real,
@@ -68,9 +69,11 @@ from amigo_gym.model.kinematics import (
 from amigo_gym.model.numeric import clip, where
 from amigo_gym.model.params import RobotParams, check_pair, check_real, show_value
 from amigo_gym.model.randomization import Randomization, StepNoise, draw_key, intervals, make_randomization, sample
-from amigo_gym.paths import FAMILIES, CirclePath, ClothoidPath, ManoeuvrePath, make_family_path
+from amigo_gym.paths import FAMILIES, CirclePath, ClothoidPath, ManoeuvrePath, check_path, make_family_path
+from amigo_gym.paths.analysis import Feasibility, feasibility
 from amigo_gym.paths.clothoid import STATUS_END, PathLoops
 from amigo_gym.paths.families import RANDOM_RANGES
+from amigo_gym.paths.points import cached_file_path, is_points_file
 from amigo_gym.task.v0 import (
     OBS_HEAD,
     V0_DEFAULTS,
@@ -88,10 +91,6 @@ from amigo_gym.task.v0 import (
     reward_term_columns,
     steady_heading,
 )
-
-if TYPE_CHECKING:
-    from amigo_gym.paths import Feasibility
-
 
 #: names accepted by ``path=`` (or pass a path object implementing :class:`amigo_gym.paths.PathSpec`)
 PATH_FAMILIES: tuple[str, ...] = ("circle", "manoeuvre", "figure8", "lane_change", "random", "mixed")
@@ -228,8 +227,6 @@ class TrackingParams:
                 what = "True or False" if allowed[0] is True else f"one of {list(allowed)}"
                 raise ValueError(f"{o}.{name} must be {what}, got {value!r}")
         if isinstance(self.path, str) and self.path not in PATH_FAMILIES:
-            from amigo_gym.paths.points import cached_file_path, is_points_file
-
             if not is_points_file(self.path):
                 raise ValueError(
                     f"{o}.path must be one of {list(PATH_FAMILIES)}, a points file (.csv, .json) or a path object, "
@@ -237,8 +234,6 @@ class TrackingParams:
                 )
             s(self, "path", cached_file_path(self.path))  # amigo_gym.paths.from_file, fitted once per file
         if not isinstance(self.path, str):  # a path object: checked, wrapped unless a ClothoidPath (paths.user)
-            from amigo_gym.paths.user import check_path
-
             s(self, "path", check_path(self.path, "AmigoBot-v1"))
         # AmigoBot-v0's configuration (ideal actuators, v0's observation and reward) keeps AmigoBot-v0's ranges
         # (check_v0's): its steps need no delay ring, so dt in [1e-6, 2] s. (name, low, high, low end open)
@@ -409,8 +404,6 @@ def make_tracking_params(
     tr = settings.get("true_robot")
     act_file: dict[str, float] = {}
     if isinstance(tr, str | os.PathLike):
-        from amigo_gym.logs import load_robot_file
-
         try:
             tr, act_file = load_robot_file(tr)
         except (FileNotFoundError, ValueError) as exc:
@@ -439,22 +432,18 @@ def obs_fields(p: TrackingParams) -> tuple[str, ...]:
     """Names of the observation's components, in order (module table; ``observation="v0"``: AmigoBot-v0's)."""
     if p.observation == "v0":
         return tuple(obs_names(p))
-    out = list(OBS_HEAD)
-    for d in p.preview:
-        out += [f"preview_x_{d:g}m", f"preview_y_{d:g}m", f"preview_curvature_{d:g}m"]
+    preview = [f"preview_{c}_{d:g}m" for d in p.preview for c in ("x", "y", "curvature")]
     speeds = ("reference_speed", "reference_speed_ahead", "speed_error", "wheel_rate_1", "wheel_rate_2")
-    return (*out, *speeds, "previous_command_1", "previous_command_2")
+    return (*OBS_HEAD, *preview, *speeds, "previous_command_1", "previous_command_2")
 
 
 def obs_bounds(p: TrackingParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Finite ``(low, high)`` bounds of the observation (module table; ``observation="v0"``: AmigoBot-v0's)."""
     if p.observation == "v0":
         return obs_bounds_of(p.termination_distance, p.error_scale, len(p.preview))
-    high = [error_bound(p.termination_distance, p.error_scale), 1.0, 1.0, 1.0]
-    for b in constants(p).preview_bounds:
-        high += [b, b, 1.0]
-    high += [1.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0]
-    hi = np.array(high)
+    e_max = error_bound(p.termination_distance, p.error_scale)
+    preview = [v for b in constants(p).preview_bounds for v in (b, b, 1.0)]
+    hi = np.array([e_max, 1.0, 1.0, 1.0, *preview, 1.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0])
     lo = -hi
     lo[-7:-5] = 0.0  # the reference speeds
     return lo, hi
@@ -681,8 +670,6 @@ def _apply_feasibility(p: TrackingParams, problem: str | None, stacklevel: int) 
 @lru_cache(maxsize=256)
 def _feasibility(path: Any, v: float, robot: RobotParams, rot: float | None) -> Feasibility:
     """:func:`amigo_gym.paths.feasibility` at the speed ``v`` [m/s] of A, ramp limit ``rot`` [rad/s^2] or None."""
-    from amigo_gym.paths import feasibility
-
     return feasibility(path, v, robot, "A", max_rotational_acceleration=rot)
 
 
@@ -1016,8 +1003,7 @@ def start_state(
     if p.start_at_rest:
         w1 = w2 = zero
     else:
-        v0 = reference_speed(p, ep, zero)
-        w1, w2 = actuators.wheel_rates_columns(v0, zero, k.nominal)
+        w1, w2 = actuators.wheel_rates_columns(reference_speed(p, ep, zero), zero, k.nominal)
     s_h = _progress(k, path, hx, hy, zero, progress)
     return State(ax, ay, beta, w1, w2, zero, zero, s_h, w1 / k.w_max, w2 / k.w_max, 0)
 
@@ -1031,12 +1017,10 @@ def step_columns(
     and take the exact actuator step with the step's slip; then evaluate the new state (:func:`evaluate_columns`).
     Returns the new state, its :class:`Outcome`, the draws (:class:`~amigo_gym.model.randomization.StepNoise`).
     """
-    from amigo_gym.model.randomization import step_noise
-
     p = k.params
     dt = p.dt
     c1, c2, cmd1, cmd2 = action_commands(a1, a2, k.w_max)
-    noise = step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
+    noise = randomization.step_noise(ep.key, state.steps, p.randomize, ep.slip_max)
     heading: tuple[Real, Real] | None = None
     if p.ideal_actuators:
         v, bdot = body_velocity_columns(cmd1, cmd2, k.nominal)
@@ -1195,6 +1179,5 @@ def placed_state(
 ) -> State:
     """The start state ``st`` with A at ``pose = (x_A, y_A, beta)`` [m, m, rad] and H's progress there."""
     x, y, b = pose
-    hx = x + ep.l3 * col_cos(b)
-    hy = y + ep.l3 * col_sin(b)
+    hx, hy = h_from_a(x, y, col_cos(b), col_sin(b), ep.l3)
     return st._replace(x=x, y=y, beta=b, progress=_progress(k, path, hx, hy, 0.0, progress))
