@@ -20,8 +20,9 @@ IntArray = NDArray[np.int64]
 
 class PathArena:
     """The flattened paths of ``n`` rows in one float64 array :attr:`flat`: row ``i``'s is
-    ``flat[starts[i]:stops[i]]``. Each distinct path object is stored once while a row uses it; a path that does not
-    fit is appended after compacting the live paths if they fill <= 3/4 of :attr:`flat`, else after doubling it."""
+    ``flat[starts[i]:stops[i]]``. A path object is stored once while rows use it, a path :meth:`build` writes for its
+    row alone; one that does not fit is appended after compacting the live paths if they fill <= 3/4 of :attr:`flat`,
+    else after doubling it."""
 
     def __init__(self, n: int) -> None:
         self.flat: Array = np.zeros(1024)
