@@ -39,7 +39,7 @@ from amigo_gym.model.kinematics import advance_angle, body_velocity_columns, cas
 from amigo_gym.model.randomization import EpisodeDraw
 from amigo_gym.paths.batch import PathBatch
 from amigo_gym.paths.clothoid import P_CLOSED, P_LENGTH, locate_columns, pose_columns_of
-from amigo_gym.paths.families import FAMILIES, segment_params
+from amigo_gym.paths.families import make_family_path, segment_params
 from amigo_gym.sim import fast_v1, fast_v1_batch, layout_v1
 from amigo_gym.task import v0 as task
 from amigo_gym.task import v1 as tracking
@@ -211,7 +211,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
             loops = fast_v1.path_loops()
             rows, got = np.fromiter(self._unbuilt, dtype=np.intp), list(self._unbuilt.values())
             self._unbuilt = {}
-            built = [FAMILIES[q.pop("family")].build(loops=loops, **q) if isinstance(q, dict) else q for q in got]
+            built = [make_family_path(q["family"], loops=loops, **{k: v for k, v in q.items() if k != "family"})
+                     if isinstance(q, dict) else q for q in got]  # fmt: skip
             self._paths.replace(rows, built)
         return self._paths
 
@@ -403,7 +404,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 self.path_infos[i] = info
                 if info["family"] == "random":
                     q = tracking.random_pool_path(k.params, info["id"], fast_v1.path_loops())
-                self._unbuilt[i] = dict(info) if q is None else q
+                self._unbuilt[i] = info if q is None else q
                 if q is None:
                     built.append((i, segment_params(info["family"], info)))
                 else:

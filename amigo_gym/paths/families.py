@@ -171,15 +171,15 @@ def figure8(
     rightmost point heading ``-pi/2``; crosses the origin at ``s = L/4`` and ``3L/4``.
     """
     size, phi, b = _checked("figure8", FIGURE8_RANGES, (size, crossing_angle, transition))
-    segs, n = _family(loops, 1, size, phi, b)
+    path, _, n = _path_of(loops, 1, size, phi, b)
     if n == -1:
         raise ValueError(f"figure8.transition {transition!r} is too long for crossing_angle {crossing_angle!r}")
-    if n == -2:
+    if path is None:
         raise ValueError(
             f"figure8: crossing_angle {crossing_angle!r} with transition {transition!r} leaves no room for the "
             "crossing lines; use a smaller angle or transition"
         )
-    return ClothoidPath(_segments(segs, n), (size / 2.0, 0.0), -math.pi / 2, closed=True, loops=loops)
+    return path
 
 
 def figure8_segments(buf: Buffer, nodes: Buffer, out: Buffer, size: float, crossing_angle: float, b: float) -> int:
@@ -217,13 +217,13 @@ def lane_change(
     (positive left) over ``length`` [m] in (0, 1000], ``lead`` again (its segments: :func:`lane_change_segments`;
     ``|offset| <~ 0.68 length``)."""
     off, ln, lead = _checked("lane_change", LANE_CHANGE_RANGES, (offset, length, lead))
-    segs, n = _family(loops, 2, off, ln, lead)
-    if n < 0:
-        bound = segs[1]
+    path, out, _ = _path_of(loops, 2, off, ln, lead)
+    if path is None:
+        bound = out[1]
         raise ValueError(
             f"lane_change.offset must satisfy |offset| <= {bound:.4f} length = {bound * ln:.4g} m, got {offset!r}"
         )
-    return ClothoidPath(_segments(segs, n), loops=loops)
+    return path
 
 
 def lane_change_segments(buf: Buffer, nodes: Buffer, out: Buffer, offset: float, length: float, lead: float) -> int:
@@ -291,17 +291,19 @@ def _transition(out: Buffer, g: int, length: float, k0: float, k1: float) -> int
     return _put(out, g, length, k0, (k1 - k0) / length) if length > 0.0 else g
 
 
-def _family(loops: PathLoops | None, kind: int, a: float, b: float, c: float) -> tuple[list[float], int]:
-    # family_segments' segments (compiled with loops) and their number (< 0: an error)
+def _path_of(loops: PathLoops | None, k: int, a: float, b: float, c: float) -> tuple[ClothoidPath | None, Any, int]:
+    # family_segments' path (compiled with loops) from family_start, its output and count (< 0: an error, no path)
     if loops is not None:
-        out = loops.family(kind, a, b, c).tolist()
-        return out, int(out.pop())
-    out = [0.0] * (3 * FAMILY_SEGMENTS)
-    return out, family_segments([0.0] * RUN_SCRATCH, RUN_NODES, out, kind, a, b, c)
-
-
-def _segments(v: list[float], n: int) -> tuple[ClothoidSegment, ...]:
-    return tuple(ClothoidSegment(v[3 * g], v[3 * g + 1], v[3 * g + 2]) for g in range(n))
+        out = loops.family(k, a, b, c).tolist()
+        n = int(out.pop())
+    else:
+        out = [0.0] * (3 * FAMILY_SEGMENTS)
+        n = family_segments([0.0] * RUN_SCRATCH, RUN_NODES, out, k, a, b, c)
+    if n < 0:
+        return None, out, n
+    x, y, th, closed = family_start(k, a)
+    segs = tuple(ClothoidSegment(out[3 * g], out[3 * g + 1], out[3 * g + 2]) for g in range(n))
+    return ClothoidPath(segs, (x, y), th, closed=closed, loops=loops), out, n
 
 
 def random_path(

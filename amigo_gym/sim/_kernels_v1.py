@@ -349,9 +349,8 @@ def family_rows(
         lay[i, 0] = g
         if g < 0:
             continue
-        for j in range(g):
-            for q in range(3):
-                segs[i, 4 * j + q] = out[3 * j + q]
+        for j in range(3 * g):  # (length, curvature, rate) of segment j // 3 into segs[i, 4 (j // 3) + j % 3]
+            segs[i, j + j // 3] = out[j]
         closed = families.family_start(kinds[i], params[i, 0])[3]
         n, m, total, kmax, spacing = clothoid.path_layout(segs[i], g, sample_spacing, closed)
         lay[i, 1], lay[i, 2], lay[i, 3], lay[i, 4], lay[i, 5] = n, m, total, kmax, spacing
