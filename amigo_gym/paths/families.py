@@ -130,12 +130,7 @@ def run_segments(
 def s_curve_half(buf: Buffer, nodes: Buffer, segs: Buffer, theta_max: float) -> tuple[float, float]:
     """End point of the first half of the unit S-curve from the origin along x0: clothoids of curvature
     ``0 -> theta_max -> 0`` over length 1 each (``segs``: 6 floats of scratch)."""
-    segs[0] = 1.0
-    segs[1] = 0.0
-    segs[2] = theta_max
-    segs[3] = 1.0
-    segs[4] = theta_max
-    segs[5] = -theta_max
+    _put(segs, _put(segs, 0, 1.0, 0.0, theta_max), 1.0, theta_max, -theta_max)
     x, y, _th = run_segments(buf, nodes, segs, 2, 0.0, 0.0, 0.0)
     return x, y
 
@@ -373,8 +368,7 @@ def make_family_path(
     if fam is None:
         raise ValueError(f"path family must be one of {sorted(FAMILIES)}, got {name!r}")
     allowed = set(fam.params) | ({"direction"} if name in ("circle", "manoeuvre") else set())
-    unknown = sorted(set(params) - allowed)
-    if unknown:
+    if unknown := sorted(set(params) - allowed):
         raise ValueError(f"path family {name!r} has no parameter {unknown[0]!r}; it takes {sorted(allowed)}")
     if fam.random:
         if rng is None:
