@@ -133,8 +133,7 @@ class PathSpec(Protocol):
 def check_hint(sp: Real) -> None:
     """Raise :func:`check_real`'s error for the first NaN or infinite hint ``s_prev`` (float or array)."""
     a = np.asarray(sp, dtype=np.float64)
-    bad = a[~np.isfinite(a)]
-    if bad.size:
+    if (bad := a[~np.isfinite(a)]).size:
         check_real("locate", "s_prev", float(bad.flat[0]))
 
 
@@ -555,16 +554,9 @@ def locate_rows(
         else:
             r = locate_global(pose, buf, nodes, 0, pv, x[i], y[i])
         out[0, i] = lap_arc(r[0], pv[P_LENGTH], pv[P_CLOSED] != 0.0)
-        out[1, i] = r[0]
-        out[2, i] = r[1]
-        out[3, i] = r[2]
-        out[4, i] = r[3]
-        out[5, i] = r[4]
-        out[6, i] = r[5]
-        out[7, i] = r[6]
-        out[8, i] = r[7]
-        out[9, i] = r[8]
-        out[10, i] = r[9]
+        floats = r[:10]  # (the status, r[10], an int: a tuple of one type to index)
+        for k in range(10):
+            out[k + 1, i] = floats[k]
         out[11, i] = r[10]
 
 
