@@ -33,8 +33,7 @@ def _fields(owner: str, what: str, value: Any, names: Collection[str]) -> dict[s
         kinds = {"params": "AmigoBot-v0's TrackingParams.v0(...) or a mapping of its keywords"}
         kind = kinds.get(what, "a RobotParams or a mapping of its fields")
         raise TypeError(f"{owner}: {what} must be {kind}, got {type(value).__name__}")
-    bad = sorted(str(k) for k in value if k not in names)
-    if bad:
+    if bad := sorted(str(k) for k in value if k not in names):
         raise TypeError(f"{owner}: unknown {what} field(s) {bad}; allowed: {', '.join(names)}")
     return dict(value)
 
@@ -51,8 +50,7 @@ def make_env_params(
     mapping of its fields) and any other setting (overriding ``params``'). Raises ``TypeError`` (an unknown keyword
     or field, a ``params`` / ``robot`` of another type) or ``ValueError`` (:func:`amigo_gym.task.v0.check_v0`).
     """
-    unknown = sorted(k for k in settings if k not in V0_DEFAULTS)
-    if unknown:
+    if unknown := sorted(k for k in settings if k not in V0_DEFAULTS):
         allowed = ", ".join(("params", *V0_DEFAULTS))
         names = ", ".join(map(repr, unknown))
         raise TypeError(f"{owner} got unexpected keyword argument(s) {names}; allowed: {allowed}")

@@ -69,16 +69,14 @@ def record_info(
         time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: floats
             or columns. path: the path's description (the single env's only), or None.
     """
-    v_true = values[_VT]
-    v_ref = values[_VREF]
     return {
         "pose": record[_POSE],
         "h_position": record[_H],
         "cross_track_error": values[_E],
         "progress": values[_PROGRESS],
-        "speed": v_true,
-        "reference_speed": v_ref,
-        "speed_error": v_true - v_ref,
+        "speed": values[_VT],
+        "reference_speed": values[_VREF],
+        "speed_error": values[_VT] - values[_VREF],
         "wheel_rates": record[_RATES],
         "command": record[_COMMAND],
         "wheel_angles": record[_ANGLES],

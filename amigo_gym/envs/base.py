@@ -55,8 +55,7 @@ def check_reset_options(options: Mapping[str, Any] | None, extra: tuple[str, ...
     if not isinstance(options, Mapping):
         raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
     allowed = ("pose", *extra)
-    unknown = sorted(str(k) for k in options if k not in allowed)
-    if unknown:
+    if unknown := sorted(str(k) for k in options if k not in allowed):
         raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(allowed)}")
 
 
@@ -73,10 +72,8 @@ def check_vector_args(owner: str, num_envs: Any, max_episode_steps: Any, render_
 def box_spaces(bounds: tuple[Array, Array]) -> tuple[spaces.Box, spaces.Box]:
     """The action space ``Box(-1, 1, (2,), float32)`` and the observation space ``Box(low, high)`` (float32) of
     one robot, from the observation's bounds ``(low, high)``."""
-    low, high = bounds
-    return spaces.Box(-1.0, 1.0, (2,), np.float32), spaces.Box(
-        low.astype(np.float32), high.astype(np.float32), dtype=np.float32
-    )
+    low, high = (b.astype(np.float32) for b in bounds)
+    return spaces.Box(-1.0, 1.0, (2,), np.float32), spaces.Box(low, high, dtype=np.float32)
 
 
 def check_reset_mask(mask: Any, n: int) -> BoolArray:

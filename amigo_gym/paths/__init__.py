@@ -6,15 +6,7 @@ from __future__ import annotations
 
 from amigo_gym.paths.analysis import Feasibility, LagProfile, Preview, feasibility, heading_lag_profile, preview
 from amigo_gym.paths.batch import PathBatch
-from amigo_gym.paths.classic import (
-    CirclePath,
-    ClosestPoint,
-    ManoeuvrePath,
-    PathPoint,
-    PathPose,
-    Projection,
-    wrap_angle,
-)
+from amigo_gym.paths.classic import CirclePath, ClosestPoint, ManoeuvrePath, PathPoint, PathPose, Projection, wrap_angle
 from amigo_gym.paths.clothoid import (
     STATUS_END,
     STATUS_INTERIOR,
