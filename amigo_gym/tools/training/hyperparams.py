@@ -126,9 +126,7 @@ class Hyperparams:
         from stable_baselines3.common.noise import NormalActionNoise, OrnsteinUhlenbeckActionNoise
 
         mean, sigma = np.zeros(n_actions), self.noise_std * np.ones(n_actions)
-        if self.noise_type == "normal":
-            return NormalActionNoise(mean, sigma)
-        return OrnsteinUhlenbeckActionNoise(mean, sigma)
+        return (NormalActionNoise if self.noise_type == "normal" else OrnsteinUhlenbeckActionNoise)(mean, sigma)
 
 
 def sb3_class(algo: str) -> Any:
@@ -190,8 +188,7 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
         raise ValueError(
             f"{where}: policy must be MlpPolicy (the observation is a vector) or {LOWPASS_POLICY} (td3), got {policy!r}"
         )
-    normalize = hp.get("normalize", hp.get("normalize_kwargs"))
-    out.normalize = _normalize(normalize, hp.get("gamma"))
+    out.normalize = _normalize(hp.get("normalize", hp.get("normalize_kwargs")), hp.get("gamma"))
     noise = hp.get("noise_type")
     if noise is not None:
         if algo == "ppo":

@@ -135,8 +135,7 @@ def env_kwargs(env_id: str = ENV_ID, overrides: dict[str, Any] | None = None) ->
         return json.loads(json.dumps(overrides or {}))  # type: ignore[no-any-return]
     params = make_env_params("train", None, **(overrides or {}))
     v0 = v0_settings(params) or {}
-    kwargs: dict[str, Any] = json.loads(json.dumps({**v0, "robot": asdict(params.robot)}))
-    return kwargs
+    return json.loads(json.dumps({**v0, "robot": asdict(params.robot)}))  # type: ignore[no-any-return]
 
 
 def _native(vec: str, n_envs: int) -> bool:
@@ -254,8 +253,7 @@ def _callbacks(
                 for key in ("h_rms_m", "h_rms_settled_m", "speed_err_rms", "failure_rate"):
                     vals = np.array([e["failure" if key == "failure_rate" else key] for e in self.episodes])
                     vals = vals[np.isfinite(vals)]
-                    value = float(vals.mean()) if vals.size else float("nan")
-                    self.task_metrics[key] = value
+                    self.task_metrics[key] = value = float(vals.mean()) if vals.size else float("nan")
                     self.logger.record(f"eval/{key}", value)
 
     cbs: list[Any] = [Checkpoint()]
