@@ -233,8 +233,7 @@ def parse_agents(specs: Sequence[str]) -> list[AgentSpec]:
             raise FileNotFoundError(f"--agents {spec}: no file matches {pattern!r}")
         out += [_model_spec(name or None, Path(f), i) for i, f in enumerate(files)]
     names_seeds = [(a.name, a.seed) for a in out]
-    dup = sorted({x for x in names_seeds if names_seeds.count(x) > 1})
-    if dup:
+    if dup := sorted({x for x in names_seeds if names_seeds.count(x) > 1}):
         raise ValueError(f"--agents: the same (agent, seed) twice: {dup}")
     return out
 
@@ -568,8 +567,7 @@ def markdown_report(doc: Mapping[str, Any]) -> str:
             "",
             *tm.md_table(("scenario", "held out", *agents), rows),
         ]
-    infeasible = {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}
-    if infeasible:
+    if infeasible := {n: r for n, r in doc.get("feasibility", {}).items() if not r["feasible"]}:
         lines += ["", "## Paths beyond the robot's limits (feasibility='warn' or 'off')", ""]
         for name, r in infeasible.items():
             where = "; ".join(
@@ -830,8 +828,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             scenarios = tuple(sc.cut(2, 120) for sc in scenarios)
         if a.scenarios:
             known = {sc.name: sc for sc in suite}
-            bad = [n for n in a.scenarios if n not in known]
-            if bad:
+            if bad := [n for n in a.scenarios if n not in known]:
                 raise ValueError(f"--scenarios: unknown {bad}; see amigo-gym benchmark --list")
             chosen = {sc.name: sc for sc in scenarios}
             scenarios = tuple(chosen.get(n, known[n]) for n in a.scenarios)

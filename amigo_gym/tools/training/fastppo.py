@@ -246,8 +246,7 @@ class FastPPOSettings:
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> FastPPOSettings:
-        bad = sorted(set(d) - {f.name for f in fields(cls)})
-        if bad:
+        if bad := sorted(set(d) - {f.name for f in fields(cls)}):
             raise ValueError(f"FastPPOSettings: unknown field(s) {bad}")
         return cls(**d)  # __post_init__ makes hidden a tuple
 
@@ -268,8 +267,7 @@ def _check_curriculum(s: FastPPOSettings) -> None:
         )
     kw = {k: v for k, v in s.env_kwargs.items() if k != "path_params"}
     p = tracking.make_tracking_params(o, path_params=final, **kw)
-    problem = tracking.drawn_feasibility_problem(p)
-    if problem is not None and p.feasibility != "off":
+    if (problem := tracking.drawn_feasibility_problem(p)) is not None and p.feasibility != "off":
         raise ValueError(f"{o}.curriculum_max_curvature {s.curriculum_max_curvature:g} 1/m: {problem}")
 
 
@@ -296,11 +294,9 @@ def load_settings_yaml(path: str | os.PathLike[str]) -> dict[str, Any]:
     file for a run key, unknown keys (all) or the first bad value."""
     hp = load_hyperparams(path, YAML_ENV_ID)
     names = [f.name for f in fields(FastPPOSettings)]
-    run_keys = sorted(str(k) for k in hp if k in YAML_RUN_KEYS)
-    if run_keys:
+    if run_keys := sorted(str(k) for k in hp if k in YAML_RUN_KEYS):
         raise ValueError(f"{path}: {', '.join(run_keys)} belong to a run's command line, not a hyperparameter file")
-    unknown = sorted(str(k) for k in hp if k not in names)
-    if unknown:
+    if unknown := sorted(str(k) for k in hp if k not in names):
         allowed = ", ".join(n for n in names if n not in YAML_RUN_KEYS)
         raise ValueError(f"{path}: unknown key(s) for fastppo: {', '.join(unknown)} (allowed: {allowed})")
     out = {str(k): (list(v) if isinstance(v, (list, tuple)) else v) for k, v in hp.items()}

@@ -42,8 +42,7 @@ TORCH_NAMES: dict[str, str] = {
 def _torch_object(name: str) -> Any:
     """The torch class a ``policy_kwargs`` name stands for (``ValueError`` if it is not in :data:`TORCH_NAMES`)."""
     head, _, attr = name.rpartition(".")
-    module = TORCH_NAMES.get(attr)
-    if module is not None and head in ("", module, f"th.{module}", f"torch.{module}"):
+    if (module := TORCH_NAMES.get(attr)) is not None and head in ("", module, f"th.{module}", f"torch.{module}"):
         import torch
 
         return getattr(getattr(torch, module), attr)
@@ -145,8 +144,7 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
     kw: dict[str, Any] = {}
     if isinstance(value, Mapping):
         allowed = {"norm_obs", "norm_reward", "clip_obs", "clip_reward", "gamma", "epsilon"}
-        bad = sorted(str(k) for k in value if k not in allowed)
-        if bad:
+        if bad := sorted(str(k) for k in value if k not in allowed):
             raise ValueError(f"normalize: unknown key(s) {', '.join(bad)}; allowed: {', '.join(sorted(allowed))}")
         kw = dict(value)
     elif value is not True:
@@ -159,15 +157,13 @@ def _normalize(value: Any, gamma: Any) -> dict[str, Any] | None:
 def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparams") -> Hyperparams:
     """The checked mapping ``hp`` of a file for ``algo``; ``ValueError``: unknown keys (all) or the first bad value."""
     allowed = (set(inspect.signature(sb3_class(algo)).parameters) - {"self", *RESERVED}) | set(META_KEYS)
-    unknown = sorted(str(k) for k in hp if k not in allowed)
-    if unknown:
+    if unknown := sorted(str(k) for k in hp if k not in allowed):
         raise ValueError(
             f"{where}: unknown key(s) for {algo}: {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})"
         )
     out = Hyperparams()
     for name in ("n_timesteps", "n_envs"):
-        v = hp.get(name)
-        if v is not None:
+        if (v := hp.get(name)) is not None:
             if isinstance(v, float) and v.is_integer():
                 v = int(v)  # rl-zoo files often write 1e6
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
@@ -189,8 +185,7 @@ def parse_hyperparams(algo: str, hp: Mapping[str, Any], where: str = "hyperparam
             f"{where}: policy must be MlpPolicy (the observation is a vector) or {LOWPASS_POLICY} (td3), got {policy!r}"
         )
     out.normalize = _normalize(hp.get("normalize", hp.get("normalize_kwargs")), hp.get("gamma"))
-    noise = hp.get("noise_type")
-    if noise is not None:
+    if (noise := hp.get("noise_type")) is not None:
         if algo == "ppo":
             raise ValueError(f"{where}: noise_type applies to sac and td3, not ppo")
         if noise not in ("normal", "ornstein-uhlenbeck"):

@@ -234,8 +234,7 @@ def markdown_random_paths(doc: Mapping[str, Any]) -> str:
     lines += ["", f"Per bin of the path's peak |kappa| [1/m], {tols[0]:g} m:", ""]
     lines += [md_row("agent", *(f"[{lo:g}, {hi:g})" for lo, hi in bins)), md_row(*["---"] * (len(bins) + 1))]
     lines += [md_row(a, *(cell(a, "curvature", tols[0], kappa=b) for b in bins)) for a in agents]
-    seeds = [(r["agent"], r["seed"]) for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]
-    if seeds:
+    if seeds := [(r["agent"], r["seed"]) for r in rows if r["group"] == "seed" and r["tolerance"] == tols[0]]:
         lines += ["", "Per training seed:", "", md_row("agent", "seed", *(f"{t:g} m" for t in tols))]
         lines += [md_row(*["---"] * (len(tols) + 2))] + [
             md_row(a, s, *(cell(a, "seed", t, seed=s) for t in tols)) for a, s in seeds

@@ -276,8 +276,7 @@ def make_storage(cfg: SweepConfig) -> Any:
     kwargs: dict[str, Any] = {"engine_kwargs": connect if sqlite else {}}
     if not memory:  # in memory: no other worker, and the heartbeat's thread would get its own database
         kwargs |= {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
-        retry = getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)  # Optuna >= 4.9
-        if retry is not None:
+        if (retry := getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)) is not None:  # Optuna >= 4.9
             kwargs["heartbeat_stale_trial_callback"] = retry(max_retry=cfg.max_retry)
         else:
             kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
@@ -336,8 +335,7 @@ def open_study(cfg: SweepConfig, storage: Any, sampler_seed: int = 0) -> Any:
                 ) from None
             time.sleep(0.5)
         for key, mine in (("mode", cfg.mode), ("env_id", cfg.env_id), ("objective", OBJECTIVE)):
-            theirs = study.user_attrs.get(key)
-            if theirs is not None and theirs != mine:
+            if (theirs := study.user_attrs.get(key)) is not None and theirs != mine:
                 raise ValueError(f"study {cfg.name!r} has {key} {theirs!r}, not {mine!r}") from None
         return study
     attrs = {"command": cfg.command, "argv": public_argv(cfg.argv), "mode": cfg.mode, "algos": cfg.algos,
@@ -449,8 +447,7 @@ def base_params(algo: str, base: Mapping[str, Any]) -> dict[str, Any]:
     ``ValueError``: a sampled key is missing or outside its range."""
     names = ["learning_rate", "gamma"] + (["gae_lambda", "ent_coef", "clip_range", "n_epochs"] if algo == "ppo"
                                           else ["tau", "batch_size"] + ["noise_std"] * (algo == "td3"))  # fmt: skip
-    missing = [n for n in names if n not in base]
-    if missing:
+    if missing := [n for n in names if n not in base]:
         raise ValueError(f"--enqueue-base: the base file has no {', '.join(missing)} for {algo}")
     if algo != "ppo" and base["batch_size"] not in batch_choices(base):
         raise ValueError(
