@@ -332,12 +332,18 @@ def test_path_object_of_another_class_runs_the_reference() -> None:
     _run(envs, n, mode, 70, seed=2)
 
 
-def test_path_arena_rows_read_their_paths() -> None:
-    from amigo_gym.sim.fast_v1_batch import PathArena
+def _random_pool(count: int) -> list[Any]:
+    # the first ``count`` paths of the default random pool
     from amigo_gym.task import v1 as tracking
 
     p = tracking.make_tracking_params("t", None, path="random")
-    pool = [tracking.random_pool_path(p, i) for i in range(40)]
+    return [tracking.random_pool_path(p, i) for i in range(count)]
+
+
+def test_path_arena_rows_read_their_paths() -> None:
+    from amigo_gym.sim.fast_v1_batch import PathArena
+
+    pool = _random_pool(40)
     n = 16
     arena = PathArena(n)
     rows: list[Any] = [None] * n
@@ -390,10 +396,8 @@ def test_path_arena_builds_family_paths_in_place() -> None:
     """Rows whose family paths the arena builds (``PathArena.build``, compiled) read the constructors' own flat
     vectors bit for bit (the same compiled functions), among rows holding path objects, through compactions."""
     from amigo_gym.sim.fast_v1_batch import PathArena
-    from amigo_gym.task import v1 as tracking
 
-    p = tracking.make_tracking_params("t", None, path="random")
-    pool = [tracking.random_pool_path(p, i) for i in range(10)]
+    pool = _random_pool(10)
     n = 12
     arena = PathArena(n)
     want: list[Any] = [None] * n
@@ -450,10 +454,8 @@ def test_drawn_paths_are_the_arenas_and_their_descriptions() -> None:
 
 def test_path_arena_survives_pickling() -> None:
     from amigo_gym.sim.fast_v1_batch import PathArena
-    from amigo_gym.task import v1 as tracking
 
-    p = tracking.make_tracking_params("t", None, path="random")
-    pool = [tracking.random_pool_path(p, i) for i in range(6)]
+    pool = _random_pool(6)
     arena = PathArena(4)
     arena.assign([0, 1, 2, 3], [pool[0], pool[1], pool[0], pool[2]])
     clone, paths = pickle.loads(pickle.dumps((arena, pool)))
