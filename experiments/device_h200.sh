@@ -10,8 +10,9 @@
 #    ideal cells; the model comes back as gpu_model.zip); last, with --overlap, the throughput at N_TRAIN again with
 #    `train-fast --overlap` (about 30 s; after the budgeted training, whose budget it leaves as it was);
 # 3. the vector env's step against numba's threads at N = N_SCALE, the step alone (thread_wait.py's work = 0):
-#    AmigoBot-v0 and v1 (defaults) on each of THREADS, v1 on the last also with OMP_WAIT_POLICY=ACTIVE (the env's
-#    default is PASSIVE); v1's training distribution on the first and the last; then the share of v1's one-thread
+#    AmigoBot-v0 and v1 (defaults) on each of THREADS, v1 on the last also with OMP_WAIT_POLICY=ACTIVE, v0 and v1 on
+#    the last also with GOMP_SPINCOUNT=0 (the env's default is PASSIVE with a spin of 1000, before 2026-12-01 PASSIVE
+#    alone); v1's training distribution on the first and the last; then the share of v1's one-thread
 #    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up), at N_SCALE with
 #    the defaults and at N_TRAIN as train-fast steps it (restarts and the final infos included).
 # Each step has its own time limit, so one that fails or runs long leaves the others their time.
@@ -45,6 +46,9 @@ export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
         done
     done
     OMP_WAIT_POLICY=ACTIVE timeout 60 $py experiments/thread_wait.py AmigoBot-v1 "$N_SCALE" "$last" 0 || echo "exit $?"
+    for env in AmigoBot-v0 AmigoBot-v1; do
+        GOMP_SPINCOUNT=0 timeout 60 $py experiments/thread_wait.py $env "$N_SCALE" "$last" 0 || echo "$env spin 0: exit $?"
+    done
     for t in $first $last; do
         timeout 90 $py experiments/thread_wait.py AmigoBot-v1 "$N_SCALE" "$t" 0 training || echo "training $t: exit $?"
     done

@@ -8,7 +8,7 @@ Arguments: env id, N, threads (1: ``kernel="numba"``; more: ``"numba-parallel"``
 time when spinning workers compete with it; 0: the step alone, for the scaling with threads) and ``training``
 (AmigoBot-v1 with the training distribution's ``env_kwargs``, ``benchmark.TRAINING_DISTRIBUTION``). Prints the least
 wall time per step over 3 repeats, the process CPU time of that repeat, the threading layer and the wait policy
-libgomp was given (the env sets PASSIVE unless the caller set one), and the CPU.
+libgomp was given (the env sets PASSIVE and a spin count of 1000 unless the caller set a policy), and the CPU.
 """
 
 from __future__ import annotations
@@ -48,9 +48,9 @@ for _ in range(3):
             np.sin(np.arange(20000.0)).sum()  # the caller's own work between steps
     w, c = (time.perf_counter() - w0) / steps, (time.process_time() - c0) / steps
     best = min(best, (w, c))
-wait = os.environ.get("OMP_WAIT_POLICY", "default")
+wait, spin = os.environ.get("OMP_WAIT_POLICY", "default"), os.environ.get("GOMP_SPINCOUNT", "default")
 print(
     f"{env_id}{' training' if kwargs else ''} N={n} threads={threads} work={int(work)} "
-    f"layer={numba.threading_layer()} OMP_WAIT_POLICY={wait}: "
+    f"layer={numba.threading_layer()} OMP_WAIT_POLICY={wait} GOMP_SPINCOUNT={spin}: "
     f"wall {best[0] * 1e6:.0f} us, CPU {best[1] * 1e6:.0f} us a step; {cpu_model()}, load {os.getloadavg()[0]:.1f}"
 )

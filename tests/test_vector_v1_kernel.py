@@ -193,22 +193,25 @@ import os, gymnasium as gym, numpy as np, numba, amigo_gym
 e = gym.make_vec("AmigoBot-v0", 8, vectorization_mode="vector_entry_point", kernel="numba-parallel")
 e.reset(seed=0)
 e.step(np.zeros((8, 2)))
-print("layer", numba.threading_layer(), "env", os.environ.get("OMP_WAIT_POLICY"))
+print("layer", numba.threading_layer(), "env", os.environ.get("OMP_WAIT_POLICY"), os.environ.get("GOMP_SPINCOUNT"))
 """
 
 
 @pytest.mark.parametrize("given", [None, "ACTIVE"])
 def test_parallel_threads_wait_passively(given: str | None) -> None:
-    """The parallel kernel's OpenMP threads sleep between steps (``OMP_WAIT_POLICY=PASSIVE``, as libgomp itself
-    reports it with ``OMP_DISPLAY_ENV``) unless the user set the policy; spinning threads made a 2-thread step 8-10x
-    slower than one thread on a busy 2-core machine (docs/performance.md)."""
-    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
-    env |= {"OMP_DISPLAY_ENV": "TRUE", "NUMBA_NUM_THREADS": "2"} | ({"OMP_WAIT_POLICY": given} if given else {})
+    """The parallel kernel's OpenMP threads spin 1,000 pauses after a parallel loop, then sleep
+    (``OMP_WAIT_POLICY=PASSIVE``, ``GOMP_SPINCOUNT=1000``, as libgomp itself reports them with ``OMP_DISPLAY_ENV``),
+    unless the user set the policy (then neither is touched); libgomp's default spin made a 2-thread step 8-10x slower
+    than one thread on a busy 2-core machine (docs/performance.md)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    env |= {"OMP_DISPLAY_ENV": "VERBOSE", "NUMBA_NUM_THREADS": "2"} | ({"OMP_WAIT_POLICY": given} if given else {})
     out = subprocess.run([sys.executable, "-c", _WAIT_SCRIPT], env=env, capture_output=True, text=True, check=True)
-    want = given or "PASSIVE"
-    assert f"env {want}" in out.stdout
-    if "layer omp" in out.stdout:  # libgomp read the policy when numba started its threads
+    want, spin = (given, None) if given else ("PASSIVE", "1000")
+    assert f"env {want} {spin}" in out.stdout
+    if "layer omp" in out.stdout:  # libgomp read them when numba started its threads
         assert f"OMP_WAIT_POLICY = '{want}'" in out.stdout + out.stderr
+        if spin:
+            assert f"GOMP_SPINCOUNT = '{spin}'" in out.stdout + out.stderr
 
 
 @pytest.mark.parametrize("path", ["circle", "manoeuvre"])

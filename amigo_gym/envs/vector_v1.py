@@ -113,8 +113,8 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         render_mode: ``None`` or ``"rgb_array"`` (``render()`` returns one frame per robot).
         autoreset_mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``, as in ``SyncVectorEnv``.
         kernel: ``"auto"``, ``"numpy"`` or ``"numba"`` as for :class:`amigo_gym.envs.AmigoBotV1Env`, or
-            ``"numba-parallel"`` (the compiled loops on numba's threads, which sleep between steps:
-            ``OMP_WAIT_POLICY=PASSIVE`` unless set before numba starts them).
+            ``"numba-parallel"`` (the compiled loops on numba's threads, which sleep between steps after a short
+            spin: :func:`amigo_gym.sim.fast_v1.wait_passively`, unless ``OMP_WAIT_POLICY`` was set before).
         params, **settings: the task settings, exactly as for ``gym.make("AmigoBot-v1", ...)``.
 
     Infos: the single env's numeric keys as ``(N, ...)`` arrays with ``_key`` masks; each robot's path description

@@ -65,9 +65,13 @@ def use_fast_path(requested: bool | None = None) -> bool:
 
 
 def wait_passively() -> None:
-    """``OMP_WAIT_POLICY=PASSIVE`` unless set, so that numba's OpenMP threads sleep between calls instead of spinning;
-    call it before they start (the first parallel call or ``numba.set_num_threads``)."""
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    """Unless the user set ``OMP_WAIT_POLICY``: ``PASSIVE`` and ``GOMP_SPINCOUNT=1000`` (unless set): numba's OpenMP
+    (libgomp) threads spin 1,000 pauses after a parallel loop (tens of µs; libgomp's own count where threads outnumber
+    cores), then sleep; libgomp's default spins 300,000, ``PASSIVE`` alone none (docs/performance.md, "Threads on a
+    busy machine"). Call it before they start (the first parallel call or ``numba.set_num_threads``)."""
+    if "OMP_WAIT_POLICY" not in os.environ:
+        os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+        os.environ.setdefault("GOMP_SPINCOUNT", "1000")
 
 
 def set_threads(n: int) -> None:
