@@ -275,8 +275,7 @@ def curriculum_path_params(s: FastPPOSettings, env_steps: int) -> dict[str, floa
     """The random paths' parameters after ``g = env_steps`` (None without a curriculum): stage ``j = min(S, floor(S g
     / (f T)))`` of ``S = curriculum_stages`` (``f = curriculum_fraction``, ``T = total_steps``), each bound ``b_0 +
     (b_S - b_0) j / S``."""
-    ends = s.curriculum()
-    if ends is None:
+    if (ends := s.curriculum()) is None:
         return None
     start, final = ends
     n, span = s.curriculum_stages, s.curriculum_fraction * s.total_steps
