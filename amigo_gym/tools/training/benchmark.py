@@ -422,19 +422,17 @@ def _finite_mean(values: Iterable[Any]) -> float | None:
     return float(x[np.isfinite(x)].mean()) if np.isfinite(x).any() else None
 
 
-def paired_differences(
-    doc: Mapping[str, Any], baseline: str = BASELINE, *, reps: int = 10_000, seed: int = 0
-) -> dict[str, Any]:
+def paired_differences(doc: Mapping[str, Any], *, reps: int = 10_000, seed: int = 0) -> dict[str, Any]:
     """The JSON ``paired`` (module docstring) of a benchmark document ``doc`` (its ``scenarios`` and ``results``):
-    every agent against ``baseline``, ``reps`` bootstrap resamples."""
+    every agent against :data:`BASELINE`, ``reps`` bootstrap resamples."""
     by: dict[tuple[str, str], list[Mapping[str, Any]]] = {}
     for r in sorted(doc["results"], key=lambda r: r["seed"]):
         by.setdefault((r["agent"], r["scenario"]), []).append(r)
     agents: dict[str, Any] = {}
-    for agent in dict.fromkeys(r["agent"] for r in doc["results"] if r["agent"] != baseline):
+    for agent in dict.fromkeys(r["agent"] for r in doc["results"] if r["agent"] != BASELINE):
         rng, cells = np.random.default_rng(seed), []
         for sc in doc["scenarios"]:
-            base_runs, runs = by.get((baseline, sc["name"]), []), by.get((agent, sc["name"]), [])
+            base_runs, runs = by.get((BASELINE, sc["name"]), []), by.get((agent, sc["name"]), [])
             base, ag = _episodes_mm(base_runs), _episodes_mm(runs)
             if base is None or ag is None or base.shape[1] != ag.shape[1]:
                 continue
@@ -459,7 +457,7 @@ def paired_differences(
         if cells:
             trimmed = {k: float(trim_mean([c[f"{k}_mm"] for c in cells], 0.25)) for k in ("baseline", "agent")}
             agents[str(agent)] = {"cells": cells, "trimmed_mean_mm": trimmed}
-    return {"baseline": baseline, "metric": "h_rms_m", "unit": "mm", "reps": reps, "seed": seed, "agents": agents}
+    return {"baseline": BASELINE, "metric": "h_rms_m", "unit": "mm", "reps": reps, "seed": seed, "agents": agents}
 
 
 def paired_lines(paired: Mapping[str, Any]) -> list[str]:
