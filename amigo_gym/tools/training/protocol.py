@@ -104,9 +104,8 @@ def validation_cells(env_id: str, episodes: int = 5, max_steps: int = 0) -> tupl
     steps when ``max_steps > 0``. Raises ``ValueError``: ``episodes`` out of range, no cell on ``env_id``."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= len(VALIDATION_SEEDS):
         raise ValueError(f"episodes must be an integer in [1, {len(VALIDATION_SEEDS)}], got {episodes!r}")
-    seeds = VALIDATION_SEEDS[:episodes]
-    cells = tuple(
-        replace(sc, seeds=seeds).cut(episodes, max_steps if max_steps > 0 else sc.max_steps)
+    cells = tuple(  # Scenario.cut keeps the first ``episodes`` seeds
+        replace(sc, seeds=VALIDATION_SEEDS).cut(episodes, max_steps if max_steps > 0 else sc.max_steps)
         for sc in VALIDATION
         if sc.env_id == env_id
     )
