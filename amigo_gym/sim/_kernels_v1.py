@@ -356,12 +356,11 @@ def family_rows(
         lay[i, 1], lay[i, 2], lay[i, 3], lay[i, 4], lay[i, 5] = n, m, total, kmax, spacing
 
 
-@_jit
-def family_fill(
+def _family_fill(
     nodes: F64, flat: F64, starts: NDArray[np.int64], kinds: NDArray[np.int64], params: F64, segs: F64, lay: F64
 ) -> None:
     """The flat vectors of :func:`family_rows`' paths into ``flat[starts[i]:]`` (:func:`build_flat`)."""
-    for i in range(len(kinds)):
+    for i in numba.prange(len(kinds)):
         x, y, th, closed = families.family_start(kinds[i], params[i, 0])
         n, m = int(lay[i, 1]), int(lay[i, 2])
         build_flat(nodes, flat[starts[i] :], segs[i], int(lay[i, 0]), n, m, lay[i, 3], lay[i, 5], x, y, th, closed)
@@ -875,3 +874,5 @@ ideal_rows = _jit(_twin(_ideal_rows, "ideal_rows"))
 ideal_rows_parallel = _jit_parallel(_twin(_ideal_rows, "ideal_rows_parallel"))
 record_rows = _jit(_twin(_record_rows, "record_rows"))
 record_rows_parallel = _jit_parallel(_twin(_record_rows, "record_rows_parallel"))
+family_fill = _jit(_twin(_family_fill, "family_fill"))
+family_fill_parallel = _jit_parallel(_twin(_family_fill, "family_fill_parallel"))

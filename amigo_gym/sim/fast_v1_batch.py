@@ -24,7 +24,8 @@ class PathArena:
     row alone; one that does not fit is appended after compacting the live paths if they fill <= 3/4 of :attr:`flat`,
     else after doubling it."""
 
-    def __init__(self, n: int) -> None:
+    def __init__(self, n: int, parallel: bool = False) -> None:
+        self.parallel = parallel  # the builds' loop on numba's threads
         self.flat: Array = np.zeros(1024)
         self.used = 0
         self.starts: IntArray = np.zeros(n, dtype=np.int64)
@@ -68,7 +69,8 @@ class PathArena:
             self._release(i)
             self._key -= 1  # (path objects' keys are their ids, > 0)
             self._hold(i, self._key, self._live.setdefault(self._key, [None, *self._append(size), 0]))
-        kv.family_fill(nodes, self.flat, self.starts[np.asarray(rows, dtype=np.intp)], kinds, params, segs, lay)
+        fill = kv.family_fill_parallel if self.parallel else kv.family_fill
+        fill(nodes, self.flat, self.starts[np.asarray(rows, dtype=np.intp)], kinds, params, segs, lay)
 
     def _release(self, i: int) -> None:
         old = self._row_ids[i]
@@ -134,7 +136,7 @@ class BatchKernel:
         self.parallel = parallel
         if parallel:
             fast_v1.wait_passively()
-        self.arena = PathArena(n)
+        self.arena = PathArena(n, parallel)
         self.ws: Array = np.zeros((len(layout_v1.Rows._fields), n))
         self.keys: NDArray[np.uint64] = np.zeros(n, dtype=np.uint64)
         self.ideal = k.params.ideal_actuators and self._row.n_normal == 0
