@@ -809,7 +809,7 @@ def train(
             "versions": versions(("gymnasium", "torch")),
             **where,
             "cpu_s_this_call": {k: round(float(v), 2) for k, v in cpu_s.items()},
-            "wall_s_this_call": {k: round(float(v), 3) for k, v in wall_s.items()},
+            "wall_s_this_call": {k: round(float(v), 6) for k, v in wall_s.items()},
         }
         if record["finished"]:
             _policy(s, r, {"env_steps": r.global_step, "seed": s.seed}).save(out / "model.zip")
