@@ -224,6 +224,29 @@ def test_goal_tolerance_on_a_straight_line(kernel: str, tol: float, step: int, c
     assert not term.any() and list(info["end_condition"]) == [""] * 3
 
 
+@pytest.mark.parametrize("kernel", ["auto", "numpy"])
+def test_leaving_the_path_ends_off_path(kernel: str) -> None:
+    """One wheel at full rate, the other still: the robot turns on a 0.14 m circle and leaves the default path; the
+    step that terminates says ``"off_path"`` (not the end of the path), every step before it ``""``; so do the
+    vector env's rows."""
+    env = gym.make("AmigoBot-v1", kernel=kernel, max_episode_steps=400)
+    env.reset(seed=0)
+    for _ in range(400):
+        _, _, term, trunc, info = env.step(np.array([1.0, 0.0]))
+        assert info["end_condition"] == ("off_path" if term else "")
+        if term or trunc:
+            break
+    assert term and not info["end_of_path"]
+    venv: Any = gym.make_vec("AmigoBot-v1", 2, vectorization_mode="vector_entry_point", max_episode_steps=400)
+    venv.reset(seed=0)
+    for _ in range(400):
+        _, _, term, _, info = venv.step(np.tile([1.0, 0.0], (2, 1)))
+        assert list(info["end_condition"]) == ["off_path" if t else "" for t in term]
+        if term.any():
+            break
+    assert term.any()
+
+
 def test_goal_tolerance_is_checked() -> None:
     with pytest.raises(ValueError, match="goal_tolerance"):
         gym.make("AmigoBot-v1", goal_tolerance=-1.0)

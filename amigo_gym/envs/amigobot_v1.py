@@ -69,7 +69,7 @@ def record_info(
         time: time since the reset [s]; true_robot: ``{"r1", "r2", "l1"}`` [m]; delay [s]; end_of_path: floats
             or columns. path: the path's description (the single env's only), or None.
     """
-    return {
+    info = {
         "pose": record[_POSE],
         "h_position": record[_H],
         "cross_track_error": values[_E],
@@ -88,12 +88,14 @@ def record_info(
             "smooth": values[_SMOOTH],
         },
         "time": time,
-        **({} if path is None else {"path": path}),
-        "true_robot": true_robot,
-        "delay": delay,
-        "slip": record[_SLIP],
-        "end_of_path": end_of_path,
     }
+    if path is not None:  # built in order, not by a ** of a conditional dict: 60 ns of a 3.7 µs step
+        info["path"] = path
+    info["true_robot"] = true_robot
+    info["delay"] = delay
+    info["slip"] = record[_SLIP]
+    info["end_of_path"] = end_of_path
+    return info
 
 
 class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]]):
@@ -332,11 +334,11 @@ class AmigoBotV1Env(JsonSpecMixin, gym.Env[ObsArray, NDArray[np.floating[Any]]])
             return terminated
         gx, gy = self._goal  # NaN: no goal
         h = info["h_position"]
-        goal = gx == gx and bool(tracking.goal_reached(self._k.params, float(h[0]), float(h[1]), gx, gy))
-        if goal:
-            terminated = True
+        if gx == gx and tracking.goal_reached(self._k.params, float(h[0]), float(h[1]), gx, gy):
             info["end_of_path"] = True
-        info["end_condition"] = tracking.end_condition(terminated, info["end_of_path"], goal)
+            info["end_condition"] = "goal"
+            return True
+        info["end_condition"] = "end_of_path" if info["end_of_path"] else "off_path" if terminated else ""
         return terminated
 
     def _record_info(self, rec: Array, v: list[float]) -> dict[str, Any]:

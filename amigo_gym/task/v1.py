@@ -693,11 +693,6 @@ def goal_reached(p: TrackingParams, hx: Real, hy: Real, gx: Real, gy: Real) -> A
     return dx * dx + dy * dy <= p.goal_tolerance * p.goal_tolerance
 
 
-def end_condition(terminated: bool, end_of_path: bool, goal: bool) -> str:
-    """The entry of :data:`END_CONDITIONS` for one robot's step."""
-    return "goal" if goal else "end_of_path" if end_of_path else "off_path" if terminated else ""
-
-
 class Envelope(NamedTuple):
     """A family's bounds of ``|kappa|`` [1/m] and ``|dkappa/ds|`` [1/m^2] over its paths; ``what``: its parameters."""
 
