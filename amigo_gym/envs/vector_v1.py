@@ -439,7 +439,9 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
             ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0
         out, keys = np.empty((len(idx), len(intervals))), np.zeros(len(idx), dtype=np.uint64)
-        fast_v1.kernels().draw_uniforms(ptrs[idx], np.array(intervals), out, keys[: len(keys) * keyed])
+        kv = fast_v1.kernels()
+        draw = kv.draw_uniforms_parallel if self._batch is not None and self._batch.parallel else kv.draw_uniforms
+        draw(ptrs[idx], np.array(intervals), out, keys[: len(keys) * keyed])
         return out, keys
 
     def _started(self, idx: NDArray[np.intp], rec: Array) -> Array:

@@ -792,22 +792,20 @@ def _record_rows(rec: F64, smooth_weight: float) -> None:
         rec[L.R_REWARD, i] = task.reward_product(rec[L.R_TRACK, i], rec[L.R_SPEED, i], rec[L.R_HEADING, i], s)
 
 
-@_jit
-def start_rows(
+def _start_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     rec: F64, rows: NDArray[np.int64], v_true: F64, t: F64, smooth_weight: float,
 ) -> None:  # fmt: skip
     """:func:`evaluate` and :func:`fill_record` of the rows ``rows (m,)`` of ``ws``, at the start speeds ``v_true``
     [m/s] and times ``t`` [s]: observations into ``obs (m, D)``, records into ``rec (m, RECORD_WIDTH)``."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
-    for j in range(rows.shape[0]):
+    for j in numba.prange(rows.shape[0]):
         i = rows[j]
         evaluate(c, flat[starts[i] : stops[i]], ws, i, obs[j], rec[j], v_true[j], t[j])
         fill_record(rec[j], smooth_weight)
 
 
-@_jit
-def restart_rows(
+def _restart_rows(
     c: F64, flat: F64, starts: NDArray[np.int64], stops: NDArray[np.int64], ws: F64, obs: NDArray[np.floating],
     rec: F64, rows: NDArray[np.int64], template: F64, start: F64, u: F64, smooth_weight: float,
 ) -> None:  # fmt: skip
@@ -817,15 +815,16 @@ def restart_rows(
     start speed of A [m/s]; ``u (m, 3)``: the draws in [-1, 1]."""
     c, flat, ws, obs, rec = _bare(c), _bare(flat), _bare(ws), _bare(obs), _bare(rec)
     r = _rows(ws)
-    for j in range(rows.shape[0]):
+    x, y, b, l3, s = r.x, r.y, r.beta, r.l3, r.progress  # arrays: the parallel loop takes no named tuple
+    for j in numba.prange(rows.shape[0]):
         i = rows[j]
         pv = flat[starts[i] : stops[i]]
         ws[:, i] = template
         uj = (u[j, 0], u[j, 1], u[j, 2])
         hx, hy, beta = tracking.start_offsets(start[0], start[1], start[2], uj, start[3], start[4])
-        r.x[i], r.y[i] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), r.l3[i])
-        r.beta[i] = beta
-        r.progress[i] = progress(c, pv, float(hx), float(hy), 0.0)
+        x[i], y[i] = kinematics.a_from_h(hx, hy, math.cos(beta), math.sin(beta), l3[i])
+        b[i] = beta
+        s[i] = progress(c, pv, float(hx), float(hy), 0.0)
         evaluate(c, pv, ws, i, obs[j], rec[j], start[5], 0.0)
         fill_record(rec[j], smooth_weight)
 
@@ -851,13 +850,12 @@ _next_uint32: Any = _bitgen_call(2, numba.types.uint32, llvm_ir.IntType(32))
 _next_double: Any = _bitgen_call(3, numba.types.float64, llvm_ir.DoubleType())
 
 
-@_jit
-def draw_uniforms(bitgens: NDArray[np.int64], intervals: F64, out: F64, keys: NDArray[np.uint64]) -> None:
+def _draw_uniforms(bitgens: NDArray[np.int64], intervals: F64, out: F64, keys: NDArray[np.uint64]) -> None:
     """Row ``j``'s draws from the bit generator at ``bitgens[j]``, numpy's numbers and states: ``out[j, q] =
     U(intervals[q])`` (``lo + (hi - lo) next_double``; ``lo`` undrawn where ``lo == hi``), then ``keys[j]`` (if not
     empty) as ``draw_key`` (``Generator.integers``' Lemire bits: ``next_uint64 >> 1``, ``next_uint32 >> 31``)."""
     one = np.uint64(1)
-    for j in range(out.shape[0]):
+    for j in numba.prange(out.shape[0]):
         for q in range(out.shape[1]):
             lo, hi = intervals[q, 0], intervals[q, 1]
             out[j, q] = lo if lo == hi else lo + (hi - lo) * _next_double(bitgens[j])
@@ -876,3 +874,9 @@ record_rows = _jit(_twin(_record_rows, "record_rows"))
 record_rows_parallel = _jit_parallel(_twin(_record_rows, "record_rows_parallel"))
 family_fill = _jit(_twin(_family_fill, "family_fill"))
 family_fill_parallel = _jit_parallel(_twin(_family_fill, "family_fill_parallel"))
+start_rows = _jit(_twin(_start_rows, "start_rows"))
+start_rows_parallel = _jit_parallel(_twin(_start_rows, "start_rows_parallel"))
+restart_rows = _jit(_twin(_restart_rows, "restart_rows"))
+restart_rows_parallel = _jit_parallel(_twin(_restart_rows, "restart_rows_parallel"))
+draw_uniforms = _jit(_twin(_draw_uniforms, "draw_uniforms"))
+draw_uniforms_parallel = _jit_parallel(_twin(_draw_uniforms, "draw_uniforms_parallel"))

@@ -151,7 +151,7 @@ class BatchKernel:
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
-        par = "_parallel" if self.parallel else ""
+        self._par = par = "_parallel" if self.parallel else ""
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
         self._step_rows: Any = fast_v1.direct_call(getattr(kv, "step_rows" + par), *args)
         if self.ideal:
@@ -202,7 +202,7 @@ class BatchKernel:
         m = len(rows)
         rec = np.empty((m, layout_v1.RECORD_WIDTH))
         a = self.arena
-        fast_v1.kernels().start_rows(
+        getattr(fast_v1.kernels(), "start_rows" + self._par)(
             self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, np.asarray(rows, dtype=np.int64),
             np.broadcast_to(np.asarray(v_true, dtype=np.float64), (m,)).copy(),
             np.broadcast_to(np.asarray(t, dtype=np.float64), (m,)).copy(), self._row.smooth_weight,
@@ -229,7 +229,7 @@ class BatchKernel:
         if a.rows_on(path) != len(a.starts):  # not every row on the path already
             a.assign(rows, [path] * len(rows))
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
-        fast_v1.kernels().restart_rows(
+        getattr(fast_v1.kernels(), "restart_rows" + self._par)(
             self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u, self._row.smooth_weight
         )
         return rec
