@@ -14,7 +14,8 @@
 #    the last also with GOMP_SPINCOUNT=0 (the env's default is PASSIVE with a spin of 1000, before 2026-12-01 PASSIVE
 #    alone); v1's training distribution on the first and the last; then the share of v1's one-thread
 #    step outside its parallel loop (experiments/serial_share.py: what bounds the threads' speed-up), at N_SCALE with
-#    the defaults and at N_TRAIN as train-fast steps it (restarts and the final infos included).
+#    the defaults and at N_TRAIN as train-fast steps it (restarts and the final infos included); last, v0's step on
+#    the last THREADS by function (experiments/step_profile.py: what stays on the calling thread).
 # Each step has its own time limit, so one that fails or runs long leaves the others their time.
 # --overlap at N = 65,536 (where the learner's share is largest), a second call of about 3 minutes if the lease has it:
 #   python3 experiments/gpu_train_bench.py --budget-s 1 --n-envs 16384 --sizes 65536 --measure-iters 16 \
@@ -54,5 +55,6 @@ export NUMBA_NUM_THREADS=${NUMBA_NUM_THREADS:-$last}
     done
     timeout 60 $py experiments/serial_share.py "$N_SCALE" || echo "serial_share: exit $?"
     timeout 120 $py experiments/serial_share.py "$N_TRAIN" training || echo "serial_share training: exit $?"
+    timeout 60 $py experiments/step_profile.py AmigoBot-v0 "$N_SCALE" numba-parallel 30 10 || echo "profile: exit $?"
     echo "== done: $(date -u +%FT%TZ)"
 } 2>&1 | tee "$OUT/device.log"
