@@ -67,6 +67,7 @@ def test_bench_env_quick_reports_every_section(tmp_path: Path, capsys: pytest.Ca
     doc = json.loads(out.read_text())
     assert [r["n"] for r in doc["vector"]] == [1, 4]
     assert doc["warmup_steps"] == 3  # --quick: min(--warmup, 3) untimed steps per vector env
+    assert doc["settings"]["sizes"] == [1, 4] and doc["settings"]["ppo_steps"] == 128  # what ran, --quick's cuts
     assert all(r["sync"] > 0 and r["native"] > 0 and r["cartpole"] > 0 for r in doc["vector"])
     assert set(doc["vector"][0]["kernels"]) <= {"numpy", "numba", "numba-parallel"}
     assert doc["fixed_cost_n1"]["cartpole_us"] > 0

@@ -10,7 +10,7 @@ import statistics
 import time
 import tracemalloc
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -572,7 +572,7 @@ def run(s: EnvSettings) -> int:
         doc["kernels"] = bench_kernels(n_k, s.repeats, s.min_time, warmup=s.warmup)
         if not doc["kernels"]:
             doc["notes"].append("--kernels: numba is not installed; only the numpy step exists")
-    doc["targets"], doc["warmup_steps"] = targets(doc), s.warmup
+    doc["targets"], doc["warmup_steps"], doc["settings"] = targets(doc), s.warmup, asdict(s)  # what ran (--quick's)
     cpu = {"cpu_model": cpu_model(), "simd": simd_level(), "cpu_count": os.cpu_count()}
     doc["machine"] = cpu | {"numba": numba_state(), "load_average": {"start": start, "end": load_average()}}
     print(format_report(doc))
