@@ -266,13 +266,15 @@ def test_analytic_inverse_solution_earns_99_percent() -> None:
     env = gym.make("AmigoBot-v0")
     pose, _ = steady_start(1.0)
     n = MAX_EPISODE_STEPS
-    ret = run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2), pose)
-    assert ret >= 0.99 * n
-    # also from the paper's start (H at the origin, beta = 0): the law converges at once
-    assert run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2), (-L3, 0.0, 0.0)) >= 0.99 * n
-    # the open-loop steady rates from the steady pose: exact, near 1 per step
     a = steady_action(1.0, 0.2)
-    assert run_episode(env, lambda p: a, pose) >= 0.99 * n
+    rets = {
+        "inverse law": run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2), pose),
+        # from the paper's start (H at the origin, beta = 0): the law converges at once
+        "inverse law, paper's start": run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2), (-L3, 0.0, 0.0)),
+        "open-loop steady rates": run_episode(env, lambda p: a, pose),  # exact, near 1 per step
+    }
+    print(rets)  # docs/env_card.md's table: python -m pytest tests/test_env.py -k earn -s -q
+    assert min(rets.values()) >= 0.99 * n
 
 
 @pytest.mark.parametrize(
@@ -291,6 +293,7 @@ def test_bad_behaviours_earn_at_most_20_percent(name: str) -> None:
         ret = run_episode(env, lambda p: lookahead_action(p, 1.0, 0.2, direction=-1), (L3, 0.0, math.pi))
     else:  # backwards along the path
         ret = run_episode(env, lambda p: -steady_action(1.0, 0.2), pose)
+    print(f"{name}: {ret:.2f}")
     assert ret <= 0.2 * n
 
 
