@@ -29,10 +29,11 @@ Reward (true state): the product of the terms ``track``, ``speed``, ``heading``,
 
 .. math::
     r = e^{-|e|/\sigma_e} \cdot e^{-|v_A - v_{ref}|/\sigma_v} \cdot \tfrac12(1 + \cos(\psi - \psi_{ss}))
-        \cdot \left(1 - w_s (1 - e^{-(\|\Delta a\|/\sigma_a)^2})\right)
+        \cdot \left(1 - w_s (1 - e^{-(\|\Delta a\|/2\sigma_a)^2})\right)
 
-with ``psi_ss = -asin(kappa l3)``, ``v_A`` the true speed of A at the step's end and ``Delta a`` the change of the
-normalised command.
+with ``psi_ss = -asin(kappa l3)``, ``v_A`` the true speed of A at the step's end, ``Delta a`` the change of the
+normalised command and ``sigma_a = sigma_smooth`` (``reward="v0"``: the wheel rates' change over
+``w_max sigma_smooth``).
 
 End: terminated when ``|e| > termination_distance`` (true H) or H reaches an open path's end; truncated by the
 registration's time limit.
