@@ -81,9 +81,11 @@ def main(argv: list[str] | None = None) -> int:
             f"{np.median(sp):.1f} ({sp.max():.1f}) |"
         )
     v1 = tuple(dict.fromkeys(r["scenario"] for r in rows if not r["scenario"].startswith("v0_")))
-    scores = {a: float(iqm(_matrix(rows, a, v1, "h_rms_m") * 1e3)) for a in agents}
-    lines += ["", f"All {len(v1)} v1 cells (the v0 cells left out): IQM of H RMS over (seed, cell) [mm]: "
-              + ", ".join(f"{a} {v:.2f}" for a, v in scores.items())]  # fmt: skip
+    held = tuple(s["name"] for s in doc["scenarios"] if s.get("held_out") and s["name"] in v1)
+    for label, cells in ((f"All {len(v1)} v1 cells", v1), (f"The {len(held)} held-out v1 cells", held)):
+        scores = {a: float(iqm(_matrix(rows, a, cells, "h_rms_m") * 1e3)) for a in agents}
+        lines += ["", f"{label} (the v0 cells left out): IQM of H RMS over (seed, cell) [mm]: "
+                  + ", ".join(f"{a} {v:.2f}" for a, v in scores.items())]  # fmt: skip
     lines += [
         "",
         "Delay and wheel-mismatch cells: mean H RMS over the episodes [mm], per training seed.",
