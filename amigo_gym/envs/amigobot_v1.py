@@ -89,7 +89,7 @@ def record_info(
         },
         "time": time,
     }
-    if path is not None:  # built in order, not by a ** of a conditional dict: 60 ns of a 3.7 µs step
+    if path is not None:  # in key order by assignments: cheaper than a ** of a conditional dict (single_step_parts.py)
         info["path"] = path
     info["true_robot"] = true_robot
     info["delay"] = delay
