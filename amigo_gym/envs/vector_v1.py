@@ -439,8 +439,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
         for i in idx[ptrs[idx] == 0].tolist():  # the generators not yet drawn from
             ptrs[i] = _capsule_pointer(self._rng(i).bit_generator.capsule, b"BitGenerator") or 0
         out, keys = np.empty((len(idx), len(intervals))), np.zeros(len(idx), dtype=np.uint64)
-        kv = fast_v1.kernels()
-        draw = kv.draw_uniforms_parallel if self._batch is not None and self._batch.parallel else kv.draw_uniforms
+        draw = fast_v1_batch.loop("draw_uniforms", self._batch is not None and self._batch.parallel)
         draw(ptrs[idx], np.array(intervals), out, keys[: len(keys) * keyed])
         return out, keys
 

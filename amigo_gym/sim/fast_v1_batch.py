@@ -18,6 +18,12 @@ Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+def loop(name: str, parallel: bool) -> Any:
+    """The compiled loop ``name`` of :mod:`amigo_gym.sim._kernels_v1`, or its twin on numba's threads
+    (``name_parallel``: the same source, the same bits)."""
+    return getattr(fast_v1.kernels(), name + ("_parallel" if parallel else ""))
+
+
 class PathArena:
     """The flattened paths of ``n`` rows in one float64 array :attr:`flat`: row ``i``'s is
     ``flat[starts[i]:stops[i]]``. A path object is stored once while rows use it, a path :meth:`build` writes for its
@@ -69,8 +75,8 @@ class PathArena:
             self._release(i)
             self._key -= 1  # (path objects' keys are their ids, > 0)
             self._hold(i, self._key, self._live.setdefault(self._key, [None, *self._append(size), 0]))
-        fill = kv.family_fill_parallel if self.parallel else kv.family_fill
-        fill(nodes, self.flat, self.starts[np.asarray(rows, dtype=np.intp)], kinds, params, segs, lay)
+        starts = self.starts[np.asarray(rows, dtype=np.intp)]
+        loop("family_fill", self.parallel)(nodes, self.flat, starts, kinds, params, segs, lay)
 
     def _release(self, i: int) -> None:
         old = self._row_ids[i]
@@ -146,21 +152,18 @@ class BatchKernel:
 
     def _bind(self) -> None:
         # the loops for exactly the types of step's arguments (fast_v1.direct_call)
-        kv = fast_v1.kernels()
         self.rows = layout_v1.Rows(*self.ws)
         f1, f2, rings = np.zeros(1), np.zeros((1, 1)), np.zeros((1, 1, 2))
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
-        self._par = par = "_parallel" if self.parallel else ""
+        par = self.parallel
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
-        self._step_rows: Any = fast_v1.direct_call(getattr(kv, "step_rows" + par), *args)
+        self._step_rows: Any = fast_v1.direct_call(loop("step_rows", par), *args)
         if self.ideal:
-            self._ideal_tangent_rows: Any = fast_v1.direct_call(
-                getattr(kv, "ideal_tangent_rows" + par), f1, f2, f1, f1, f2
-            )
+            self._ideal_tangent_rows: Any = fast_v1.direct_call(loop("ideal_tangent_rows", par), f1, f2, f1, f1, f2)
             ideal = (f1, f1, i1, i1, f2, obs, f1, f1, f2, f2)
-            self._ideal_rows: Any = fast_v1.direct_call(getattr(kv, "ideal_rows" + par), *ideal)
-            self._record_rows: Any = fast_v1.direct_call(getattr(kv, "record_rows" + par), f2, 0.0)
+            self._ideal_rows: Any = fast_v1.direct_call(loop("ideal_rows", par), *ideal)
+            self._record_rows: Any = fast_v1.direct_call(loop("record_rows", par), f2, 0.0)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -202,7 +205,7 @@ class BatchKernel:
         m = len(rows)
         rec = np.empty((m, layout_v1.RECORD_WIDTH))
         a = self.arena
-        getattr(fast_v1.kernels(), "start_rows" + self._par)(
+        loop("start_rows", self.parallel)(
             self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, np.asarray(rows, dtype=np.int64),
             np.broadcast_to(np.asarray(v_true, dtype=np.float64), (m,)).copy(),
             np.broadcast_to(np.asarray(t, dtype=np.float64), (m,)).copy(), self._row.smooth_weight,
@@ -229,7 +232,7 @@ class BatchKernel:
         if a.rows_on(path) != len(a.starts):  # not every row on the path already
             a.assign(rows, [path] * len(rows))
         rec = np.empty((len(rows), layout_v1.RECORD_WIDTH))
-        getattr(fast_v1.kernels(), "restart_rows" + self._par)(
+        loop("restart_rows", self.parallel)(
             self.consts, a.flat, a.starts, a.stops, self.ws, obs, rec, r, template, start, u, self._row.smooth_weight
         )
         return rec
