@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import platform
 import subprocess
 import sys
 from pathlib import Path
@@ -223,6 +224,11 @@ def test_bench_core_quick(tmp_path: Path, capsys: pytest.CaptureFixture[str]) ->
     assert "kernel/step_columns" in capsys.readouterr().out
     doc = json.loads(out.read_text())
     assert [r["n"] for r in doc["rows"]] == [1, 64]
+    # glibc's heap is held (the numpy routes' figures at large N would otherwise follow its trimming: docs/core.md)
+    assert doc["heap"] == (
+        "glibc's heap held (mallopt)" if platform.libc_ver()[0] == "glibc" else "the C library's heap policy"
+    )
+    assert doc["machine"].startswith("CPU: ")
     from amigo_gym.sim.fast_v1 import numba_available
 
     if numba_available():

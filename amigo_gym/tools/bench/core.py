@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import math
 import os
@@ -221,6 +222,17 @@ class CoreSettings:
         check_fields(PROG, self, **ranges, threads=(1, 4096))
 
 
+def hold_heap() -> bool:
+    """glibc only: keep freed memory in the heap (``mallopt``: no ``mmap`` below 32 MiB, no trimming), so that the numpy
+    routes' temporaries reuse their pages at every N instead of faulting them in again on each call, whatever the
+    process did before (docs/core.md); ``False`` elsewhere (the C library's own policy then)."""
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError, TypeError):
+        return False
+    return bool(mallopt(-3, 1 << 25)) and bool(mallopt(-1, 1 << 30))  # M_MMAP_THRESHOLD, M_TRIM_THRESHOLD [bytes]
+
+
 def run(s: CoreSettings) -> int:
     """``amigo-gym bench-core`` with the settings ``s``: the table on stdout (progress on stderr), ``--json``."""
     sizes = list(s.sizes or ((1, 64) if s.quick else DEFAULT_SIZES))
@@ -232,7 +244,8 @@ def run(s: CoreSettings) -> int:
         if s.threads is not None:
             set_threads(s.threads)
         threads = int(numba.get_num_threads())
-    print(f"{machine_line()}; median of {repeats} repeats", flush=True)
+    heap = "glibc's heap held (mallopt)" if hold_heap() else "the C library's heap policy"
+    print(f"{machine_line()}; {heap}; median of {repeats} repeats", flush=True)
     say(f"{PROG}: sizes {sizes}")
     rng = np.random.default_rng(0)
     rows = [_bench_one(n, repeats, min_time, s.loop_max, rng, kernels) for n in sizes]  # kernels off: columns None
@@ -242,7 +255,8 @@ def run(s: CoreSettings) -> int:
         startup = bench_startup(1 if s.quick else 3)
     print(format_table(rows, startup, threads))
     if s.json is not None:
-        atomic_write_json(s.json, {"rows": rows, "threads": threads, "startup": startup})
+        doc = {"rows": rows, "threads": threads, "startup": startup, "machine": machine_line(), "heap": heap}
+        atomic_write_json(s.json, doc)
     return 0
 
 
