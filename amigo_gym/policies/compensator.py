@@ -43,8 +43,9 @@ COLUMNS = ("cross_track_error", "sin_heading_error", "cos_heading_error", "curva
 
 def _ramped(s: Array, m: int, count: int, v: float, om: float, rob: Array) -> tuple[Any, Any]:
     """``(v, omega)`` after :data:`STEP` of the nominal ramps towards the ring's command ``m`` (0 outside [0, count))"""
-    a1 = s[1 + 2 * (m % RING)] if 0 <= m < count else 0.0
-    a2 = s[2 + 2 * (m % RING)] if 0 <= m < count else 0.0
+    on = (m >= 0) * (m < count)  # 1 or 0, not a conditional expression (numba's inlining warned of its phi)
+    a1 = on * s[1 + 2 * (m % RING)]
+    a2 = on * s[2 + 2 * (m % RING)]
     vc, omc = kinematics.body_velocity_of(a1 * rob[4], a2 * rob[4], rob[0], rob[1], 2.0 * rob[2])
     return actuators.ramp(v, vc, rob[5], rob[6], STEP).u_b, actuators.ramp(om, omc, rob[7], rob[8], STEP).u_b
 
