@@ -1,7 +1,8 @@
 """Record the golden episodes of ``AmigoBot-v0`` (tests/data/golden_v0.npz) for tests/test_golden.py.
 
 Run once from the repository root (``python tests/data/make_golden.py``) on the code whose
-behaviour is to be kept; the test then asserts that later code reproduces every number bit for bit.
+behaviour is to be kept; the test then asserts that later code reproduces every number within the stated tolerance
+(tests/golden_compare.py).
 Recorded at commit 7a293c8 (before the refactors of issue 8). May import numpy and amigo_gym.
 """
 

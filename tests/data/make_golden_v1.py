@@ -2,7 +2,8 @@
 
 Run once from the repository root (``python tests/data/make_golden_v1.py``) on the code whose behaviour
 is to be kept (the code the shipped v1 generalists were trained and benchmarked on); the test then
-asserts that later code (e.g. faster kernels) reproduces every number bit for bit. May import numpy and
+asserts that later code (e.g. faster kernels) reproduces every number within the stated tolerance
+(tests/golden_compare.py). May import numpy and
 amigo_gym.
 """
 
