@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from amigo_gym.tools.training.evaluate import ALGOS, PRETRAINED_DIR, EvalProtocol, evaluate_agents, load_agents
+from amigo_gym.tools.training.evaluate import ALGOS, PRETRAINED_DIR, EvalProtocol, evaluate_agents, load_agents, v0_name
 
 CLAIMED = PRETRAINED_DIR / "claimed.json"
 TOLERANCE = {
@@ -64,7 +64,7 @@ def rerun() -> list[dict[str, Any]]:
 
 @pytest.mark.parametrize("algo", ALGOS)
 def test_pretrained_reach_claimed_figures(algo: str, rerun: list[dict[str, Any]]) -> None:
-    claims = [r for r in claimed()["results"] if r["agent"] == algo]
+    claims = [r for r in claimed()["results"] if r["agent"] == v0_name(algo)]  # the command's name of <algo>.zip
     assert {r["scenario"] for r in claims} == {"nominal", "paper_start", "perturbed"}
     for c in claims:
         (new,) = [r for r in rerun if r["agent"] == algo and r["scenario"] == c["scenario"]]
@@ -75,7 +75,7 @@ def test_pretrained_reach_claimed_figures(algo: str, rerun: list[dict[str, Any]]
 
 def test_claimed_best_agent_meets_targets() -> None:
     """The committed claim itself: the best learned agent on the perturbed starts meets the targets."""
-    rows = [r for r in claimed()["results"] if r["scenario"] == "perturbed" and r["agent"] in ALGOS]
+    rows = [r for r in claimed()["results"] if r["scenario"] == "perturbed" and r["agent"] in map(v0_name, ALGOS)]
     best = min(rows, key=lambda r: r["h_rms_m"])
     assert best["h_rms_m"] <= 2e-3 and best["wheel_rate_dev_rms"] <= 0.1
 
@@ -85,5 +85,5 @@ def test_claims_are_for_these_models() -> None:
     doc = claimed()
     for algo in ALGOS:
         rec = json.loads((PRETRAINED_DIR / f"{algo}.json").read_text())
-        assert doc["training"][algo] == rec
+        assert doc["training"][v0_name(algo)] == rec
     assert Path(CLAIMED).is_file()
