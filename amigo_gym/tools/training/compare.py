@@ -302,7 +302,7 @@ def run_compare(s: CompareSettings) -> dict[str, Any]:
             if stale is None:
                 say(f"reusing the PPO run in {run_dir}: its recorded configuration equals the request")
             else:
-                say(f"training a fresh PPO agent for {s.train_steps} steps in {run_dir} (about 1 min on 2 cores)")
+                say(f"training a fresh PPO agent for {s.train_steps} steps in {run_dir}")
             t0 = time.perf_counter()
             rec = training["ppo_fresh"] = train(fresh)
             took = f"{time.perf_counter() - t0:.0f} s here" if stale is not None else "reused"
