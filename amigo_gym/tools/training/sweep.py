@@ -277,12 +277,16 @@ def make_storage(cfg: SweepConfig) -> Any:
     if not memory:  # in memory: no other worker, and the heartbeat's thread would get its own database
         kwargs |= {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
         if (retry := getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)) is not None:  # Optuna >= 4.9
-            kwargs["heartbeat_stale_trial_callback"] = retry(max_retry=cfg.max_retry)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                kwargs["heartbeat_stale_trial_callback"] = retry(max_retry=cfg.max_retry)
         else:
             kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
-            storage = optuna.storages.RDBStorage(url, **kwargs)
+            with warnings.catch_warnings():  # the heartbeat and its retry are experimental in Optuna
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                storage = optuna.storages.RDBStorage(url, **kwargs)
             break
         except ImportError:
             raise
