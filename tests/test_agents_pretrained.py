@@ -2,9 +2,10 @@
 
 ``claimed.json`` is the JSON that ``amigo-gym evaluate --json agents/pretrained/claimed.json`` wrote when
 the models were committed. The test re-runs the same protocol (same steps and seeds; every rollout is
-deterministic) and accepts a metric if it is within 5 % of the claim or within an absolute tolerance
-(H errors 0.02 mm, wheel-rate deviations 0.002 rad/s, returns 1.0): torch's CPU kernels may round
-differently on other machines, and the closed loop damps such differences.
+deterministic) and accepts a metric within its relative tolerance of the claim (:data:`REL`, as
+tests/test_agents_v1_pretrained.py's): torch's CPU kernels may round differently on other machines, and the closed
+loop damps such differences (the claims re-run on an AMD EPYC, and under the AVX2 recipe of docs/development.md,
+within 2e-4 of them).
 """
 
 from __future__ import annotations
@@ -18,15 +19,15 @@ import pytest
 from amigo_gym.tools.training.evaluate import ALGOS, PRETRAINED_DIR, EvalProtocol, evaluate_agents, load_agents, v0_name
 
 CLAIMED = PRETRAINED_DIR / "claimed.json"
-TOLERANCE = {
-    "h_rms_m": 2e-5,
-    "h_rms_settled_m": 2e-5,
-    "h_max_m": 2e-5,
-    "wheel_rate_dev_rms": 2e-3,
-    "wheel_rate_dev_steady_rms": 2e-3,
-    "mean_return": 1.0,
+#: relative tolerance per metric (the settled ones are small differences of the closed loop)
+REL = {
+    "h_rms_m": 0.02,
+    "h_rms_settled_m": 0.06,
+    "h_max_m": 0.02,
+    "wheel_rate_dev_rms": 0.02,
+    "wheel_rate_dev_steady_rms": 0.06,
+    "mean_return": 0.01,
 }
-REL = 0.05
 
 
 def claimed() -> dict[str, Any]:
@@ -69,8 +70,8 @@ def test_pretrained_reach_claimed_figures(algo: str, rerun: list[dict[str, Any]]
     for c in claims:
         (new,) = [r for r in rerun if r["agent"] == algo and r["scenario"] == c["scenario"]]
         assert new["terminated"] == c["terminated"] == 0
-        for key, atol in TOLERANCE.items():
-            assert abs(new[key] - c[key]) <= max(atol, REL * abs(c[key])), (algo, c["scenario"], key, new[key], c[key])
+        for key, rel in REL.items():
+            assert abs(new[key] - c[key]) <= rel * abs(c[key]), (algo, c["scenario"], key, new[key], c[key])
 
 
 def test_claimed_best_agent_meets_targets() -> None:

@@ -126,6 +126,7 @@ def test_tags_of_a_run_match_the_paths_rebuilt_independently() -> None:
     agent = parse_agents(["analytic"])[0].instantiate(env)
     eps = evaluate_tagged(agent, sc)
     pp = sc.env_kwargs["path_params"]
+    assert len(eps) == 3
     for e in eps:
         ref = random_path(np.random.default_rng(e["path_id"]), **pp)
         assert e["path_max_kappa"] == pytest.approx(_seg_max(ref), rel=1e-12)

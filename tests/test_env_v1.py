@@ -33,8 +33,8 @@ def test_registered_with_time_limit() -> None:
     ],
 )
 def test_gymnasium_check_env(kwargs: dict[str, object]) -> None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with warnings.catch_warnings():  # the checkers report most findings as warnings: each fails the test
+        warnings.simplefilter("error")
         check_env(gym.make("AmigoBot-v1", **kwargs).unwrapped, skip_render_check=True)
 
 
@@ -42,7 +42,7 @@ def test_sb3_check_env() -> None:
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+        warnings.simplefilter("error")
         sb3_check_env(gym.make("AmigoBot-v1", path="mixed", randomize="hard"))
 
 

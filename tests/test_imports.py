@@ -7,6 +7,7 @@ where it is installed, loads it when an env is built; `import amigo_gym` itself 
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 
@@ -38,7 +39,9 @@ def test_steps_load_only_what_they_use() -> None:
     default when numba is installed) loads numba, whose start-up probes ``scipy.linalg`` for BLAS when scipy is
     installed; nothing else (no ``scipy.optimize``, torch, SB3, matplotlib)."""
     assert _after_step("numpy") == [], "modules imported by `import amigo_gym` and a numpy step"
-    assert set(_after_step("auto")) <= {"scipy", "numba"}, "heavy modules imported by the compiled step"
+    compiled = set(_after_step("auto"))
+    assert compiled <= {"scipy", "numba"}, "heavy modules imported by the compiled step"
+    assert ("numba" in compiled) == (importlib.util.find_spec("numba") is not None), "the compiled step ran"
 
 
 def test_cli_help_lists_commands() -> None:

@@ -320,9 +320,11 @@ def test_a_killed_worker_process_makes_the_sweep_exit_non_zero(
     trials = optuna.load_study(study_name="died", storage=storage).get_trials()
     done = sorted(t.params["seed"] for t in trials if t.state == TrialState.COMPLETE)
     assert done == [0, 1], [(t.number, t.state, t.params, t.user_attrs) for t in trials]
-    for t in trials:  # both abandoned folders say so
-        if t.state == TrialState.FAIL and "over_budget" not in t.user_attrs:
-            assert (Path(t.user_attrs["run_dir"]) / "ABANDONED.json").is_file(), t
+    by_number = {t.number: t for t in trials}
+    for t in running:  # the killed and the stopped trial failed, and their abandoned folders say so
+        ended = by_number[t.number]
+        assert ended.state == TrialState.FAIL, ended
+        assert (Path(ended.user_attrs["run_dir"]) / "ABANDONED.json").is_file(), ended
 
 
 @pytest.mark.parametrize(

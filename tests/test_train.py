@@ -172,6 +172,13 @@ def test_td3_runs_with_noise_and_schedule(tmp_path: Path, train_here: Callable[.
     assert rec["exported_model"] == "best" and rec["exported_timesteps"] in (100, 200) and len(evals) == 2
     assert rec["best_eval"] == max(evals, key=lambda e: e["mean_reward"])
     assert (exp / "td3.zip").read_bytes() == (out / "best_model.zip").read_bytes()
+    from stable_baselines3 import TD3
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    model = TD3.load(out / "model.zip", device="cpu")  # the file's noise and schedule reached the model
+    assert model.lr_schedule(1.0) == pytest.approx(1e-3) and model.lr_schedule(0.5) == pytest.approx(5e-4)
+    noise = model.action_noise
+    assert isinstance(noise, NormalActionNoise) and np.allclose(noise._sigma, 0.1), noise
 
 
 def test_the_same_command_twice_gives_the_same_weights(tmp_path: Path, train_here: Callable[..., Ran]) -> None:
