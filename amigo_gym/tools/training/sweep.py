@@ -19,7 +19,7 @@ import sys
 import time
 import warnings
 import zlib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, get_args
@@ -262,6 +262,16 @@ def validate_agent(agent: Any, cells: Sequence[Any]) -> Validation:
 
 
 # --------------------------------------------------------------------------- storage and study
+@contextlib.contextmanager
+def _experimental_ok() -> Iterator[None]:
+    """Optuna's experimental features used on purpose (heartbeat, its retry, ``fail_stale_trials``): no warning."""
+    import optuna
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        yield
+
+
 def make_storage(cfg: SweepConfig) -> Any:
     """Optuna ``RDBStorage`` with heartbeat, grace period and retry of stale trials (in memory: without them)."""
     import optuna.storages
@@ -277,15 +287,13 @@ def make_storage(cfg: SweepConfig) -> Any:
     if not memory:  # in memory: no other worker, and the heartbeat's thread would get its own database
         kwargs |= {"heartbeat_interval": cfg.heartbeat_interval, "grace_period": cfg.grace_period}
         if (retry := getattr(optuna.storages, "RetryHeartbeatStaleTrialCallback", None)) is not None:  # Optuna >= 4.9
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            with _experimental_ok():
                 kwargs["heartbeat_stale_trial_callback"] = retry(max_retry=cfg.max_retry)
         else:
             kwargs["failed_trial_callback"] = optuna.storages.RetryFailedTrialCallback(max_retry=cfg.max_retry)
     for attempt in range(5):  # several processes creating the tables at once may collide once
         try:
-            with warnings.catch_warnings():  # the heartbeat and its retry are experimental in Optuna
-                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            with _experimental_ok():
                 storage = optuna.storages.RDBStorage(url, **kwargs)
             break
         except ImportError:
@@ -758,8 +766,7 @@ def _run(cfg: SweepConfig) -> int:
                 sampler_seed = _worker_seed(cfg)
                 study = open_study(cfg, make_storage(cfg), sampler_seed)
                 study.set_user_attr(f"worker:{socket.gethostname()}:{os.getpid()}", cfg.command)
-                with warnings.catch_warnings():  # experimental in Optuna
-                    warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                with _experimental_ok():
                     optuna.storages.fail_stale_trials(study)  # requeue dead workers' trials before checking the budget
                 mark_abandoned(study)
                 if not _exhausted(study, cfg):
