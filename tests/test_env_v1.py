@@ -266,3 +266,29 @@ def test_a_users_own_path_object() -> None:
     assert max(errors[150:]) < 1e-3  # settled on the user's path
     with pytest.raises(ValueError, match="path must be"):
         gym.make("AmigoBot-v1", path=object())
+
+
+def test_trapezoid_reference_speed_is_the_closed_form_through_its_braking():
+    """info["reference_speed"] over a whole trapezoid (accelerate, cruise, brake to 0 at T, then 0), against the
+    profile written out here: a_up t, v, v - a_down (t - T + v / a_down). The rates differ (0.2 and 0.5 m/s^2), so a
+    braking slope at the wrong rate ends at v (1 - a_up / a_down) = 0.18 m/s, not 0, at T."""
+    v, a_up, a_down, big_t = 0.3, 0.2, 0.5, 4.0
+    env = gym.make("AmigoBot-v1", speed=v, speed_profile="trapezoid", profile_accel=a_up, profile_decel=a_down,
+                   profile_duration=big_t)  # fmt: skip
+    env.reset(seed=0)
+    seen = []
+    for _ in range(50):  # 5 s: past T
+        _, _, terminated, truncated, info = env.step(np.zeros(2))
+        t = info["time"]
+        if t <= v / a_up:
+            want = a_up * t
+        elif t <= big_t - v / a_down:
+            want = v
+        else:
+            want = max(0.0, v - a_down * (t - (big_t - v / a_down)))
+        seen.append((t, info["reference_speed"], want))
+        assert terminated is False and truncated is False
+    got = np.array(seen)
+    assert got[-1, 0] > big_t and np.any(np.isclose(got[:, 0], big_t)), got[:, 0]
+    np.testing.assert_allclose(got[:, 1], got[:, 2], rtol=0, atol=1e-12)
+    assert got[np.isclose(got[:, 0], big_t), 1] == pytest.approx(0.0, abs=1e-12)
