@@ -292,3 +292,21 @@ def test_trapezoid_reference_speed_is_the_closed_form_through_its_braking():
     assert got[-1, 0] > big_t and np.any(np.isclose(got[:, 0], big_t)), got[:, 0]
     np.testing.assert_allclose(got[:, 1], got[:, 2], rtol=0, atol=1e-12)
     assert got[np.isclose(got[:, 0], big_t), 1] == pytest.approx(0.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("kernel", ["numpy", "numba"])
+@pytest.mark.parametrize("reward", ["v1", "v0"])
+def test_smoothness_term_is_its_closed_form(kernel: str, reward: str) -> None:
+    # 1 - w_s (1 - exp(-(|change| / scale)^2)), w_s = 0.2: reward "v1" the normalised command's change over
+    # 2 sigma_smooth = 0.2, "v0" the wheel rates' change over w_max sigma_smooth = 1.5 rad/s (module docstring)
+    env = gym.make("AmigoBot-v1", kernel=kernel, reward=reward)
+    env.reset(seed=0)
+    first, second = np.array([0.3, 0.5]), np.array([0.45, 0.38])
+    before = env.step(first)[4]
+    info = env.step(second)[4]
+    if reward == "v1":
+        change, scale = float(np.hypot(*(second - first))), 0.2
+    else:
+        change, scale = float(np.hypot(*(info["wheel_rates"] - before["wheel_rates"]))), 15.0 * 0.1
+    expected = 1.0 - 0.2 * (1.0 - math.exp(-((change / scale) ** 2)))
+    assert expected < 0.95 and info["reward_terms"]["smooth"] == pytest.approx(expected, rel=1e-12)

@@ -117,3 +117,22 @@ def test_step_noise_scalar_equals_batch_rows_and_is_zero_when_off() -> None:
     off = step_noise(keys, steps, Randomization(), 0.0)
     assert all(np.all(np.asarray(c) == 0.0) for c in off)
     assert np.all(np.asarray(batch.slip1) <= slip) and np.all(np.asarray(batch.slip1) >= 0.0)
+
+
+def test_step_noise_normals_have_the_stated_levels_and_are_gaussian() -> None:
+    # 2e5 draws: the sample std's relative standard error is 1/sqrt(2n) = 0.16 %, so 1 % is 6 of them; a Box-Muller
+    # with sqrt(-ln u1) (std x 0.71) or a level off by 2 % fails, as does a channel reading another's level
+    n = 200_000
+    r = Randomization(position_noise=0.005, heading_noise=0.01, wheel_rate_noise=0.2)
+    rng = np.random.default_rng(3)
+    keys = rng.integers(0, 2**63, n, dtype=np.uint64) * np.uint64(2) + rng.integers(0, 2, n, dtype=np.uint64)
+    draws = step_noise(keys, rng.integers(0, 1000, n), r, 0.0)
+    columns = {"x": (draws.x, 0.005), "y": (draws.y, 0.005), "beta": (draws.beta, 0.01)}
+    columns |= {"rate1": (draws.rate1, 0.2), "rate2": (draws.rate2, 0.2)}
+    for name, (column, level) in columns.items():
+        z = np.asarray(column) / level
+        assert abs(z.std() - 1.0) < 0.01, (name, z.std())
+        assert abs(z.mean()) < 5.0 / math.sqrt(n), (name, z.mean())
+        assert stats.kstest(z, "norm").pvalue > 1e-3, name
+    assert abs(np.corrcoef(draws.x, draws.y)[0, 1]) < 0.02 and abs(np.corrcoef(draws.rate1, draws.rate2)[0, 1]) < 0.02
+    assert np.all(np.asarray(draws.slip1) == 0.0) and np.all(np.asarray(draws.slip2) == 0.0)
