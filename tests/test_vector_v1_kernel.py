@@ -2,8 +2,8 @@
 reference column code (kernel="numpy") and with Gymnasium's SyncVectorEnv of single envs (the reference float code)
 within the golden tolerance (:data:`RTOL`: tests/golden_compare.py): observations, rewards, terminations,
 truncations and every info (keys, dtypes, values, masks), over many steps with autoresets in the three autoreset
-modes, partial resets, reseeding and pickling. On one route (serial and parallel loops, a pickled copy) the bits
-are equal."""
+modes, partial resets, reseeding and pickling. On one route (a pickled copy; the serial and parallel loops, but for
+the ideal step's tangents and exponentials) the bits are equal."""
 
 from __future__ import annotations
 
@@ -217,7 +217,9 @@ def test_parallel_threads_wait_passively(given: str | None) -> None:
 @pytest.mark.parametrize("path", ["circle", "manoeuvre"])
 def test_parallel_twin_equals_serial_ideal(path: str) -> None:
     """AmigoBot-v0's ideal step (blocks of ``ideal_rows`` and the record pass) on numba's threads equals the serial
-    one bit for bit, with some rows flagged ``l3_differs`` (the row loop) every other step."""
+    one within the golden tolerance, with some rows flagged ``l3_differs`` (the row loop) every other step: the
+    threads take libm's ``tan`` and ``exp``, the serial loops numpy's, which differ in the last bits where numpy
+    has SIMD versions (AVX-512)."""
     n = 300
     envs = [
         gym.make_vec("AmigoBot-v0", n, vectorization_mode="vector_entry_point", kernel=k, path=path,
@@ -232,7 +234,7 @@ def test_parallel_twin_equals_serial_ideal(path: str) -> None:
         for e in envs:
             e.unwrapped._batch.rows.l3_differs[130:200] = float(t % 2)  # type: ignore[attr-defined]
         r = [e.step(a) for e in envs]
-        _equal_results(r[0], r[1], f"step {t}", exact=True)
+        _equal_results(r[0], r[1], f"step {t}")
 
 
 def test_partial_resets_reseeding_and_poses() -> None:

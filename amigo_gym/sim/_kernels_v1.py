@@ -740,9 +740,9 @@ def _step_rows(
         fill_record(rec[i], smooth_weight)
 
 
-def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
-    """Pass 1 of the ideal step (no per-step draws): the tangents' arguments of every row into ``tans (2, N)``, whose
-    ``np.tan`` the caller takes."""
+def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64, take: bool) -> None:
+    """Pass 1 of the ideal step (no per-step draws): the tangents of every row into ``tans (2, N)`` if ``take``, else
+    their arguments, whose ``np.tan`` the caller takes."""
     c = _bare(c)
     beta = _rows(ws).beta
     for i in numba.prange(beta.shape[0]):
@@ -750,6 +750,10 @@ def _ideal_tangent_rows(c: F64, ws: F64, a1: F64, a2: F64, tans: F64) -> None:
         arg_h, arg_m = _ideal_motion(c, beta[i], w1, w2)[3:]
         tans[0, i] = arg_h
         tans[1, i] = arg_m
+    if take:  # a loop of its own: within the one above, LLVM takes the tangents whatever ``take``
+        for i in numba.prange(beta.shape[0]):
+            tans[0, i] = math.tan(tans[0, i])
+            tans[1, i] = math.tan(tans[1, i])
 
 
 def _ideal_rows(
@@ -782,10 +786,14 @@ def _ideal_rows(
                 rec[f, i] = one[f]
 
 
-def _record_rows(rec: F64, smooth_weight: float) -> None:
-    """Pass 3: the smoothness terms and rewards of the field-major records ``rec (RECORD_WIDTH, N)`` whose
-    exponentials are in place (``np.exp`` taken by the caller)."""
+def _record_rows(rec: F64, smooth_weight: float, take: bool) -> None:
+    """Pass 3: the smoothness terms and rewards of the field-major records ``rec (RECORD_WIDTH, N)``, the three
+    exponentials taken here if ``take``, else in place (``np.exp`` taken by the caller)."""
     rec = _bare(rec)
+    if take:
+        for i in numba.prange(rec.shape[1]):
+            for f in range(L.R_TRACK, L.R_SMOOTH_EXP + 1):
+                rec[f, i] = math.exp(rec[f, i])
     for i in numba.prange(rec.shape[1]):
         s = task.smooth_term(rec[L.R_SMOOTH_EXP, i], smooth_weight)
         rec[L.R_SMOOTH, i] = s

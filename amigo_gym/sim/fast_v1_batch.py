@@ -160,10 +160,12 @@ class BatchKernel:
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
         self._step_rows: Any = fast_v1.direct_call(loop("step_rows", par), *args)
         if self.ideal:
-            self._ideal_tangent_rows: Any = fast_v1.direct_call(loop("ideal_tangent_rows", par), f1, f2, f1, f1, f2)
+            self._ideal_tangent_rows: Any = fast_v1.direct_call(
+                loop("ideal_tangent_rows", par), f1, f2, f1, f1, f2, par
+            )
             ideal = (f1, f1, i1, i1, f2, obs, f1, f1, f2, f2)
             self._ideal_rows: Any = fast_v1.direct_call(loop("ideal_rows", par), *ideal)
-            self._record_rows: Any = fast_v1.direct_call(loop("record_rows", par), f2, 0.0)
+            self._record_rows: Any = fast_v1.direct_call(loop("record_rows", par), f2, 0.0, par)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -248,12 +250,15 @@ class BatchKernel:
         sw = self._row.smooth_weight
         if self.ideal and not self.rows.slip_max.any():  # no draws
             rec = np.empty((layout_v1.RECORD_WIDTH, ws.shape[1]))
-            self._ideal_tangent_rows(c, ws, a1, a2, self._tans)
-            np.tan(self._tans, out=self._tans)
+            par = self.parallel  # tan and exp on numba's threads, else numpy's (SIMD where the CPU has AVX-512)
+            self._ideal_tangent_rows(c, ws, a1, a2, self._tans, par)
+            if not par:
+                np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, rec)
             exps = rec[layout_v1.R_TRACK : layout_v1.R_SMOOTH_EXP + 1]  # the three arguments' contiguous rows
-            np.exp(exps, out=exps)
-            self._record_rows(rec, sw)
+            if not par:
+                np.exp(exps, out=exps)
+            self._record_rows(rec, sw, par)
             return rec.T
         rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self.keys, rec, sw)
