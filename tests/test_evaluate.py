@@ -21,6 +21,7 @@ from amigo_gym.tools.training.evaluate import (
     EvalProtocol,
     default_agents,
     evaluate_agents,
+    find_models,
     markdown_table,
     steady_start_pose,
 )
@@ -170,3 +171,34 @@ def test_compare_main_job_smoke(tmp_path: Path) -> None:
     assert (tmp_path / "eval_trajectories.png").is_file() and (tmp_path / "train_ppo" / "model.zip").is_file()
     r = subprocess.run([*cmd[:4], "--seeds", "0"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "--seeds" in r.stderr
+
+
+def _schedule_that_must_not_run(progress: float) -> float:
+    raise RuntimeError("the model's pickled learning rate ran")
+
+
+def test_a_model_is_loaded_for_acting_without_running_its_pickled_learning_rate(tmp_path: Path) -> None:
+    """The shipped ppo.zip holds its learning-rate schedule as code pickled by Python 3.11, which crashed 3.13 (a
+    segmentation fault in `compare`) when SB3 called it on loading; the loader gives it a learning rate of 0."""
+    import base64
+    import zipfile
+
+    import cloudpickle
+
+    from amigo_gym.data import pretrained_dir
+
+    src = pretrained_dir() / "ppo.zip"
+    with zipfile.ZipFile(src) as z:
+        members = {name: z.read(name) for name in z.namelist()}
+    data = json.loads(members["data"])
+    assert ":serialized:" in data["learning_rate"]  # code, not a number
+    pickled = base64.b64encode(cloudpickle.dumps(_schedule_that_must_not_run)).decode()
+    data["learning_rate"] = {":type:": "<class 'function'>", ":serialized:": pickled}
+    crafted = tmp_path / "ppo.zip"
+    with zipfile.ZipFile(crafted, "w") as z:
+        for name, blob in members.items():
+            z.writestr(name, json.dumps(data) if name == "data" else blob)
+    model = find_models(crafted)[0].load(trust=True)
+    assert model.learning_rate == 0.0
+    action, _ = model.predict(np.zeros(model.observation_space.shape, dtype=np.float32))
+    assert action.shape == (2,)

@@ -280,8 +280,10 @@ class AgentSpec:
             stats_digest = files.get(self.vecnormalize.name)
             check_pickle(self.vecnormalize, None if stats_digest is None else str(stats_digest), source, trust)
         check_pickle(self.model, None if digest is None else str(digest), source, trust)
+        # for acting: the learning rate is not loaded, a schedule being code pickled by the Python that trained it
+        # (ppo.zip's, by 3.11: calling it on 3.13 crashes the process)
         with corrupt_errors(self.model, f"{str(self.algo).upper()} model"):
-            model = sb3_class(str(self.algo)).load(self.model, device="cpu")
+            model = sb3_class(str(self.algo)).load(self.model, device="cpu", custom_objects={"learning_rate": 0.0})
         if self.vecnormalize is None:
             return model
         with corrupt_errors(self.vecnormalize, "VecNormalize statistics"), open(self.vecnormalize, "rb") as f:
