@@ -263,7 +263,7 @@ def advance_pieces(
         live = np.asarray(piece[4] > 0.0)
         if 2 * int(np.count_nonzero(live)) < live.size:  # few rows: the quadrature of the live rows alone
             x, y, theta = np.array(x), np.array(y), np.array(theta)
-            rows = [np.asarray(c)[live] for c in (x, y, theta, *piece)]
+            rows: list[Any] = [np.asarray(c)[live] for c in (x, y, theta, *piece)]
             x[live], y[live], theta[live] = fresnel.advance_nodes(
                 [0.0] * (3 * nn), 0, nn, rows[0], rows[1], rows[2], rows[3:], 0, 1, nodes, j, nn
             )

@@ -412,7 +412,7 @@ class _ConcatVectorEnv:
         outs = [e.step(a) for e, a in zip(self.envs, self._split(action), strict=True)]
         final = np.full(self.num_envs, None, dtype=object)
         for (*_, info), k in zip(outs, self.edges, strict=False):
-            for i in np.flatnonzero(info.get("_final_obs", ())):
+            for i in np.flatnonzero(info.get("_final_obs", ())).tolist():
                 final[k + i] = info["final_obs"][i]
         o, r, te, tr = (np.concatenate([out[j] for out in outs]) for j in range(4))
         return o, r, te, tr, {"final_obs": final}
