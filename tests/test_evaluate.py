@@ -179,7 +179,7 @@ def _schedule_that_must_not_run(progress: float) -> float:
 
 def test_a_model_is_loaded_for_acting_without_running_its_pickled_learning_rate(tmp_path: Path) -> None:
     """The shipped ppo.zip holds its learning-rate schedule as code pickled by Python 3.11, which crashed 3.13 (a
-    segmentation fault in `compare`) when SB3 called it on loading; the loader gives it a learning rate of 0."""
+    segmentation fault in `compare`) when SB3 called it on loading; the loaders give it a learning rate of 0."""
     import base64
     import zipfile
 
@@ -198,7 +198,14 @@ def test_a_model_is_loaded_for_acting_without_running_its_pickled_learning_rate(
     with zipfile.ZipFile(crafted, "w") as z:
         for name, blob in members.items():
             z.writestr(name, json.dumps(data) if name == "data" else blob)
+    from amigo_gym.io import sha256_file
+    from amigo_gym.policies import load_pretrained
+
     model = find_models(crafted)[0].load(trust=True)
-    assert model.learning_rate == 0.0
-    action, _ = model.predict(np.zeros(model.observation_space.shape, dtype=np.float32))
-    assert action.shape == (2,)
+    crafted.with_suffix(".json").write_text(json.dumps({"algo": "ppo", "sha256": sha256_file(crafted)}))
+    for m in (model, load_pretrained(crafted, trust=True)):  # the evaluation's loader and the package's
+        assert m.learning_rate == 0.0
+        action, _ = m.predict(np.zeros(m.observation_space.shape, dtype=np.float32))
+        assert action.shape == (2,)
+    # a learning rate stored as a number is the file's for load_pretrained (a user may train on)
+    assert load_pretrained(pretrained_dir() / "v1" / "td3lp" / "td3lp_s0.zip").learning_rate == 0.001

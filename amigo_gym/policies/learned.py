@@ -279,8 +279,9 @@ class FastPolicy(Policy):
 def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust: bool = False) -> Any:
     """Load a shipped ``AmigoBot-v1`` agent (a fast-PPO zip as a :class:`FastPolicy`, or an SB3 PPO/SAC/TD3/A2C/DDPG
     zip) after checking the SHA-256 of its manifest (default ``<zip stem>.json``, with ``sha256`` and, for SB3,
-    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here. Raises ``FileNotFoundError``
-    (no zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``."""
+    ``algo``). ``trust``: load an SB3 zip (a pickle) neither shipped nor written here. A learning rate stored as
+    pickled code (ppo.zip's, by CPython 3.11: it crashes 3.13) is not run; it is 0. Raises ``FileNotFoundError`` (no
+    zip or manifest), ``ValueError`` (no or another digest, an unknown algorithm), ``UntrustedFileError``."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"load_pretrained: no model file {p}")
@@ -296,6 +297,7 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
         raise ValueError(f"load_pretrained: sha256 of {p} is {got}, the manifest {m.name} says {want}")
     with zipfile.ZipFile(p) as z:
         fast = "model.json" in z.namelist()
+        coded = not fast and isinstance(json.loads(z.read("data")).get("learning_rate"), dict)
     if fast:
         return FastPolicy.load(p)
     algo = str(meta.get("algo", "")).lower()
@@ -305,4 +307,4 @@ def load_pretrained(path: str | Path, manifest: str | Path | None = None, trust:
     if algo not in classes:
         raise ValueError(f"load_pretrained: manifest algo must be one of {sorted(classes)}, got {algo!r}")
     require_trust(p, got, trust)
-    return classes[algo].load(str(p), device="cpu")
+    return classes[algo].load(str(p), device="cpu", custom_objects={"learning_rate": 0.0} if coded else None)
