@@ -21,9 +21,9 @@ from gymnasium.vector import AutoresetMode
 
 import amigo_gym  # noqa: F401
 from amigo_gym.envs import AmigoBotV1VectorEnv
-from amigo_gym.sim import fast_v1
+from amigo_gym.sim import fast_v1, fast_v1_batch
 
-pytest.importorskip("numba")
+numba = pytest.importorskip("numba")
 
 #: tolerance relative to ``1 + |value|`` between routes (float64; float32 observations: :data:`RTOL32`)
 RTOL = 1e-9
@@ -214,12 +214,18 @@ def test_parallel_threads_wait_passively(given: str | None) -> None:
             assert f"GOMP_SPINCOUNT = '{spin}'" in out.stdout + out.stderr
 
 
+@pytest.mark.parametrize(("simd", "threads", "take"), [(False, 2, True), (True, 2, False), (True, 8, True)])
 @pytest.mark.parametrize("path", ["circle", "manoeuvre"])
-def test_parallel_twin_equals_serial_ideal(path: str) -> None:
+def test_parallel_twin_equals_serial_ideal(
+    path: str, simd: bool, threads: int, take: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """AmigoBot-v0's ideal step (blocks of ``ideal_rows`` and the record pass) on numba's threads equals the serial
-    one within the golden tolerance, with some rows flagged ``l3_differs`` (the row loop) every other step: the
-    threads take libm's ``tan`` and ``exp``, the serial loops numpy's, which differ in the last bits where numpy
-    has SIMD versions (AVX-512)."""
+    one within the golden tolerance, with some rows flagged ``l3_differs`` (the row loop) every other step, both ways
+    the threads may take ``tan`` and ``exp`` whatever this CPU and its threads: libm's on the threads
+    (``NUMPY_SIMD`` false, or 8 threads or more), which differ from numpy's SIMD versions in the last bits, or numpy's
+    on the calling thread as the serial loops (SIMD and fewer threads)."""
+    monkeypatch.setattr(fast_v1_batch, "NUMPY_SIMD", simd)
+    monkeypatch.setattr(numba, "get_num_threads", lambda: threads)  # what the step's choice reads, not the threads
     n = 300
     envs = [
         gym.make_vec("AmigoBot-v0", n, vectorization_mode="vector_entry_point", kernel=k, path=path,
@@ -235,6 +241,7 @@ def test_parallel_twin_equals_serial_ideal(path: str) -> None:
             e.unwrapped._batch.rows.l3_differs[130:200] = float(t % 2)  # type: ignore[attr-defined]
         r = [e.step(a) for e in envs]
         _equal_results(r[0], r[1], f"step {t}")
+    assert envs[0].unwrapped._batch._take is take  # type: ignore[attr-defined]
 
 
 def test_partial_resets_reseeding_and_poses() -> None:

@@ -94,13 +94,11 @@ def _columns(kind: Any, values: Any, m: int) -> Any:
 
 
 def _is_scalar(x: Any) -> bool:
-    if isinstance(x, str | bytes):
-        return True
     try:  # (a 0-d array is not iterable)
         iter(x)
     except TypeError:
         return True
-    return False
+    return isinstance(x, str | bytes)
 
 
 class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating[Any]], NDArray[Any]]):

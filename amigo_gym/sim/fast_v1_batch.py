@@ -1,5 +1,5 @@
 """The compiled step of ``N`` robots (numba): the single robot's step over the columns of the ``(F, N)`` block in one
-compiled loop; with ideal actuators and no per-step draws, three loops with numpy's ``tan`` and ``exp`` between."""
+compiled loop; with ideal actuators and no per-step draws, three loops with ``tan`` and ``exp`` (:data:`NUMPY_SIMD`)."""
 
 from __future__ import annotations
 
@@ -13,6 +13,11 @@ from amigo_gym.paths.clothoid import P_TAIL, SAMPLE_SPACING, ClothoidPath
 from amigo_gym.paths.families import FAMILY_SEGMENTS, SEGMENT_FAMILIES
 from amigo_gym.sim import fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
+
+#: numpy's float64 ``tan`` and ``exp`` are SIMD (SVML) on AVX-512 CPUs, faster on the calling thread than libm's on
+#: fewer than about 8 of numba's threads: there the parallel step takes numpy's too (docs/performance_log.md)
+_UMATH = (getattr(np, "_core", None) or np.core)._multiarray_umath  # numpy 2, else numpy 1
+NUMPY_SIMD = bool(getattr(_UMATH, "__cpu_features__", {}).get("AVX512_SKX"))
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -157,6 +162,9 @@ class BatchKernel:
         i1, obs = np.zeros(1, dtype=np.int64), np.zeros((1, 1), dtype=np.float32)
         keys = np.zeros(1, dtype=np.uint64)
         par = self.parallel
+        import numba  # (loaded with the kernels) tan and exp on numba's threads: this CPU's and threads' choice
+
+        self._take = par and not (NUMPY_SIMD and numba.get_num_threads() < 8)
         args = (f1, f1, i1, i1, rings, f2, obs, 0, f1, f1, keys, f2, 0.0)
         self._step_rows: Any = fast_v1.direct_call(loop("step_rows", par), *args)
         if self.ideal:
@@ -168,10 +176,8 @@ class BatchKernel:
             self._record_rows: Any = fast_v1.direct_call(loop("record_rows", par), f2, 0.0, par)
 
     def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        for name in ("rows", "_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows"):
-            state.pop(name, None)
-        return state
+        bound = ("rows", "_step_rows", "_ideal_tangent_rows", "_ideal_rows", "_record_rows", "_take")  # _bind's
+        return {k: v for k, v in self.__dict__.items() if k not in bound}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
@@ -244,21 +250,17 @@ class BatchKernel:
         rings ``rings (n, L, 2)`` [rad/s] (updated) and their counter ``ring_step``; the observations into
         ``obs (n, D)``. Returns every row's info record ``(n, RECORD_WIDTH)``, new: with ideal actuators and no draws
         the transpose of a field-major ``(RECORD_WIDTH, n)`` array (each entry's column contiguous), else C-ordered."""
-        c = self.consts
-        ws = self.ws
-        a = self.arena
-        sw = self._row.smooth_weight
+        c, ws, a, sw = self.consts, self.ws, self.arena, self._row.smooth_weight
         if self.ideal and not self.rows.slip_max.any():  # no draws
             rec = np.empty((layout_v1.RECORD_WIDTH, ws.shape[1]))
-            par = self.parallel  # tan and exp on numba's threads, else numpy's (SIMD where the CPU has AVX-512)
-            self._ideal_tangent_rows(c, ws, a1, a2, self._tans, par)
-            if not par:
+            self._ideal_tangent_rows(c, ws, a1, a2, self._tans, self._take)
+            if not self._take:  # numpy's tan and exp: SIMD where the CPU has AVX-512
                 np.tan(self._tans, out=self._tans)
             self._ideal_rows(c, a.flat, a.starts, a.stops, ws, obs, a1, a2, self._tans, rec)
             exps = rec[layout_v1.R_TRACK : layout_v1.R_SMOOTH_EXP + 1]  # the three arguments' contiguous rows
-            if not par:
+            if not self._take:
                 np.exp(exps, out=exps)
-            self._record_rows(rec, sw, par)
+            self._record_rows(rec, sw, self._take)
             return rec.T
         rec = np.empty((ws.shape[1], layout_v1.RECORD_WIDTH))
         self._step_rows(c, a.flat, a.starts, a.stops, rings, ws, obs, ring_step, a1, a2, self.keys, rec, sw)
