@@ -11,7 +11,11 @@ import re
 from pathlib import Path
 
 import pytest
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # CPython 3.10: pytest's own dependency, the same parser
+    import tomli as tomllib
 
 from amigo_gym.tools.cli import COMMANDS, EXTRA_OF_MODULE, install_hint
 

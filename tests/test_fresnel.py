@@ -88,7 +88,8 @@ def test_each_rule_at_its_phase_limit() -> None:
 
 
 def test_floats_and_arrays_agree() -> None:
-    """Columns take each piece's rule by the largest phase change of their rows: within rounding of the floats."""
+    """Columns take each piece's rule by the largest phase change of their rows: within rounding of the floats (two
+    units in the last place at 1 m: numpy's cosines and sines of columns may differ from libm's in the last bit)."""
     rng = np.random.default_rng(3)
     cols = [rng.uniform(-1, 1, 64) for _ in range(6)]
     t = rng.uniform(0, 0.2, 64)
@@ -96,7 +97,7 @@ def test_floats_and_arrays_agree() -> None:
     for i in range(64):
         x, y, b = advance(*(float(c[i]) for c in cols), 0.3 * float(cols[0][i]), float(t[i]))
         assert type(x) is float and type(y) is float
-        assert abs(x - xs[i]) < 1e-16 and abs(y - ys[i]) < 1e-16 and b == bs[i]
+        assert abs(x - xs[i]) <= 2 * np.spacing(1.0) and abs(y - ys[i]) <= 2 * np.spacing(1.0) and b == bs[i]
 
 
 def test_subintervals_refuses_bad_input() -> None:

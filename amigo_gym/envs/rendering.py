@@ -39,7 +39,7 @@ TEXT = (20, 20, 20)
 
 def path_polyline(path: PathSpec, n: int = 400) -> NDArray[np.float64]:
     """Points along one traversal of the path (closed for a circle), ``(n + 1, 2)`` [m]."""
-    s = np.linspace(0.0, path.length, n + 1)
+    s = np.linspace(0.0, path.length, n + 1, dtype=np.float64)
     q = path.pose_columns(s)
     return np.stack((np.broadcast_to(q.x, s.shape), np.broadcast_to(q.y, s.shape)), axis=-1).astype(np.float64)
 

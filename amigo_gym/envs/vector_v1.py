@@ -305,7 +305,7 @@ class AmigoBotV1VectorEnv(JsonSpecMixin, VectorEnv[ObsArray, NDArray[np.floating
                 final_obs[i] = obs[i].copy()
             final_info = scatter_infos(take_rows(infos, idx), done, n)
             if self.v0_params is None:
-                final_info["end_condition"] = np.where(done, final_info["end_condition"], None)
+                final_info["end_condition"] = np.where(done, final_info["end_condition"], np.array(None))
             obs[idx], info_r = self._reset_rows(idx)
             assign_rows(infos, info_r, idx)
             self._mark_restarted(infos, idx)

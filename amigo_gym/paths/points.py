@@ -287,7 +287,7 @@ def _close(
         return np.array((x[-1] - start[0], y[-1] - start[1], th[-1] - start[2] - target))
 
     nm = len(modes)
-    coef = np.zeros(nm)
+    coef: Array = np.zeros(nm)
     scale = max(1.0, length)
     g = gap(coef)
     for _ in range(12):

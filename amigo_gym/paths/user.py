@@ -91,7 +91,7 @@ class UserPath:
         if self._user_locate is not None and not callable(self._user_locate):
             raise ValueError(f"{who}: locate must be a method (or absent), got {show_value(self._user_locate)}")
         # probes: pose_columns on a column and a float, then locate on points of the path
-        probe = np.linspace(0.0, self.length, 7)
+        probe = np.linspace(0.0, self.length, 7, dtype=np.float64)
         pose = self.pose_columns(probe)
         self.pose_columns(0.0)
         n = min(MAX_SAMPLES, max(8, math.ceil(self.length / SAMPLE_SPACING)))

@@ -147,11 +147,10 @@ class FeatureBuilder:
         new_state = np.empty_like(state)
         if h:
             cur = obs[:, self._hist_idx]
-            hist = state[:, k:].reshape(n, h, f)
-            hist = np.where(starts[:, None, None], cur[:, None, :], hist)
+            hist = np.where(starts[:, None, None], cur[:, None, :], state[:, k:].reshape(n, h, f))
             parts.append(hist.reshape(n, h * f))
             new_state[:, k:] = np.concatenate([hist[:, 1:], cur[:, None, :]], axis=1).reshape(n, h * f)
-        base = np.zeros((n, 2))
+        base: NDArray[np.float64] = np.zeros((n, 2))
         new_state[:, :k] = np.where(starts[:, None], 0.0, state[:, :k])
         if self.analytic is not None:
             a0, z_out = self.analytic.predict(obs, state=new_state[:, :1], episode_start=None)

@@ -142,7 +142,7 @@ def add_dataclass_options(parser: argparse.ArgumentParser, cls: type) -> None:
                 tp, kw["nargs"] = args[0], len(args) if origin is tuple and Ellipsis not in args else "+"
             if get_origin(tp) is Literal:
                 kw.update(type=type(get_args(tp)[0]), choices=get_args(tp))
-            elif isinstance(tp, type):
+            elif isinstance(tp, type) and get_origin(tp) is None:  # (3.10: dict[str, int] is a type)
                 kw["type"] = tp
             else:
                 raise TypeError(f"no command-line type for {tp!r}")

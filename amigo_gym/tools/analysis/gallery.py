@@ -33,7 +33,7 @@ GALLERY: dict[str, tuple[dict[str, Any], int]] = {
 }
 
 
-def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray, float]:
+def render_family(kwargs: dict[str, Any], steps: int, seed: int = 0) -> tuple[np.ndarray[Any, Any], float]:
     """The last frame of one episode with the analytic policy and H's largest error after 5 s [m]."""
     env = gym.make("AmigoBot-v1", render_mode="rgb_array", max_episode_steps=steps, **kwargs)
     policy = AnalyticTrackingPolicy(env.unwrapped.params)  # type: ignore[attr-defined]

@@ -99,7 +99,7 @@ def find_runs(folders: Sequence[str | Path]) -> tuple[list[Run], list[dict[str, 
 def curve(runs: Sequence[Run], axis: str, metric: str, *, reps: int = 10_000, seed: int = 0) -> dict[str, Any] | None:
     """Mean over ``runs`` of ``metric`` against ``axis`` (step functions on the range every seed covers) with its
     pointwise 95 % bootstrap band over seeds; ``None`` if the seeds share no range."""
-    series: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    series: dict[int, tuple[np.ndarray[Any, Any], np.ndarray[Any, Any]]] = {}
     for r in runs:  # each seed's (x, y) points, sorted by x
         pts = [(float(e[axis]), float(e[metric])) for e in r.evals if _finite(e.get(axis)) and _finite(e.get(metric))]
         xy = np.asarray(sorted(pts, key=lambda p: p[0]), dtype=np.float64).reshape(-1, 2)

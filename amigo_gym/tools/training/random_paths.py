@@ -41,7 +41,7 @@ DURATION_S, GOAL_M, SEED = 20.0, 0.02, 100
 SEED_FACTOR = 1.5
 
 
-def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray, float]:
+def draw_path(rng: np.random.RandomState, spacing: float = 0.01) -> tuple[np.ndarray[Any, Any], float]:
     """One path from the authors' ``RandomState`` calls: points ``(n, 2)`` [m] every ``spacing`` [m] and its peak
     |curvature| [1/m]. Five waypoints, legs U(0.5, 2) m in direction U[0, 2 pi), a natural cubic spline redrawn
     while |kappa| > 50 1/m, re-splined in arc length (8-point Gauss)."""

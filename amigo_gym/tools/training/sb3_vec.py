@@ -67,7 +67,7 @@ class AmigoBotSB3VecEnv(VecEnv):
         out: NDArray[Any] = obs
         return out
 
-    def step_async(self, actions: np.ndarray) -> None:
+    def step_async(self, actions: NDArray[Any]) -> None:
         self._actions = np.asarray(actions)
 
     def step_wait(self) -> VecEnvStepReturn:
@@ -87,7 +87,7 @@ class AmigoBotSB3VecEnv(VecEnv):
     def close(self) -> None:
         self.venv.close()
 
-    def get_images(self) -> Sequence[np.ndarray | None]:
+    def get_images(self) -> Sequence[NDArray[Any] | None]:
         frames = self.venv.render()
         return [None] * self.num_envs if frames is None else list(frames)
 
