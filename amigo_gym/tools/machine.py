@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import contextlib
-import importlib
 import os
 import platform
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
+
+from amigo_gym.sim.fast_v1_batch import NUMPY_UMATH
 
 #: numpy's CPU feature names, from the widest level down (x86-64 micro-architecture levels, numpy >= 2.4 naming them
 #: ``X86_V4`` ... too, then ARM)
@@ -40,15 +41,11 @@ def cpu_model() -> str:
 def simd_level() -> str:
     """The widest SIMD level that numpy detected on this CPU and may dispatch to (honouring
     ``NPY_DISABLE_CPU_FEATURES``), e.g. ``"AVX2"``; ``"unknown"`` if this numpy does not expose it."""
-    try:
-        module = importlib.import_module("numpy._core._multiarray_umath")
-    except ImportError:  # numpy 1
-        module = importlib.import_module("numpy.core._multiarray_umath")
-    features: dict[str, bool] | None = getattr(module, "__cpu_features__", None)
+    features: dict[str, bool] | None = getattr(NUMPY_UMATH, "__cpu_features__", None)
     if features is None:
         return "unknown"
-    dispatch = getattr(module, "__cpu_dispatch__", None)
-    levels = None if dispatch is None else {*dispatch, *getattr(module, "__cpu_baseline__", ())}
+    dispatch = getattr(NUMPY_UMATH, "__cpu_dispatch__", None)
+    levels = None if dispatch is None else {*dispatch, *getattr(NUMPY_UMATH, "__cpu_baseline__", ())}
     for key, name in _LEVELS:
         if features.get(key) and (levels is None or key in levels):
             return name
