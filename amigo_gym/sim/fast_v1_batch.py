@@ -15,7 +15,7 @@ from amigo_gym.sim import fast_v1, layout_v1
 from amigo_gym.task import v1 as tracking
 
 #: numpy's float64 ``tan`` and ``exp`` are SIMD (SVML) on AVX-512 CPUs, faster on the calling thread than libm's on
-#: fewer than about 8 of numba's threads: there the parallel step takes numpy's too (docs/performance_log.md)
+#: fewer than about 8 to 11 of numba's threads: there the parallel step takes numpy's (docs/performance_log.md)
 NUMPY_UMATH = (getattr(np, "_core", None) or np.core)._multiarray_umath  # numpy 2, else 1: its CPU features
 NUMPY_SIMD = bool(getattr(NUMPY_UMATH, "__cpu_features__", {}).get("AVX512_SKX"))
 
